@@ -1,0 +1,36 @@
+"""ODE integrators for the Foucault-pendulum models, found through a registry.
+
+Importing this package registers the built-in integrators (one module each) and any plug-ins advertised
+under the entry-point group ``foucault_bench.integrators``. See ``integrators.base`` for the interface.
+"""
+
+from integrators.base import (
+    STATUS_DIVERGED,
+    STATUS_FAILED,
+    STATUS_OK,
+    Integrator,
+    Problem,
+    Solution,
+    StreamedMetrics,
+)
+from integrators.fixed_step import FixedStepIntegrator
+from integrators.registry import REGISTRY, get_integrator, load_plugins, register, unregister
+
+from integrators import explicit_euler, rk4, symplectic_euler, verlet  # noqa: E402,F401  (registration)
+
+load_plugins()
+
+__all__ = [
+    "REGISTRY",
+    "STATUS_DIVERGED",
+    "STATUS_FAILED",
+    "STATUS_OK",
+    "FixedStepIntegrator",
+    "Integrator",
+    "Problem",
+    "Solution",
+    "StreamedMetrics",
+    "get_integrator",
+    "register",
+    "unregister",
+]

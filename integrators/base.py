@@ -1,0 +1,204 @@
+"""The integrator interface: one small base class, a problem, a solution, counters kept by the framework.
+
+Adding an integrator (see README "Adding an integrator"): subclass ``Integrator`` (or ``FixedStepIntegrator``
+for a compiled fixed-step scheme) in a file of its own, set the class attributes that describe it, implement
+``_solve`` (or ``make_step``), and decorate the class with ``integrators.register``. The framework then
+
+* validates the setting (a step size in s for fixed-step methods, a tolerance in (0, 1) for adaptive ones),
+* turns every exception into a ``failed`` solution with the exception's message, and every non-finite
+  state into a ``diverged`` one, so that no run crashes a benchmark matrix,
+* fills ``nfev`` from ``stages × steps`` where the integrator does not count evaluations itself,
+* silences the C libraries' chatter on stdout/stderr (SUNDIALS prints its warnings there).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import sys
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import ClassVar, Iterator
+
+import numpy as np
+
+from models import Model, PendulumParameters
+
+STATUS_OK = "ok"
+STATUS_DIVERGED = "diverged"
+STATUS_FAILED = "failed"
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """What to integrate: a model, its parameters, and the output times (s) from t = 0 to ``t_out[-1]``."""
+
+    model: Model
+    params: PendulumParameters
+    t_out: np.ndarray
+
+    def __post_init__(self) -> None:
+        t_out = np.asarray(self.t_out, dtype=np.float64)
+        if t_out.ndim != 1 or t_out.size < 2:
+            raise ValueError("t_out must be a 1-D array of at least two output times (s)")
+        if not np.all(np.isfinite(t_out)) or t_out[0] < 0 or np.any(np.diff(t_out) <= 0):
+            raise ValueError("t_out must be finite, start at t >= 0 and increase strictly")
+        object.__setattr__(self, "t_out", t_out)
+
+    @property
+    def t_end_s(self) -> float:
+        return float(self.t_out[-1])
+
+    @property
+    def parameter_vector(self) -> np.ndarray:
+        return self.params.parameter_vector()
+
+    @property
+    def initial_state(self) -> np.ndarray:
+        return self.params.initial_state()
+
+
+@dataclass
+class StreamedMetrics:
+    """Verdict ingredients computed during the run, without storing the steps.
+
+    Attributes:
+        turning_points: array (n, 3) of (t in s, x in m, y in m) at each maximum of the radius (t > 0).
+        energy_max_rel_error: max over all steps of |E(t) − E(0)| / |E(0)| (E from ``Model.energy``);
+            ``None`` where the integrator does not stream it (adaptive libraries).
+        energy_drift_per_s: least-squares slope (1/s) of (E(t) − E(0)) / |E(0)| against t over all steps;
+            ``None`` where not streamed.
+    """
+
+    turning_points: np.ndarray
+    energy_max_rel_error: float | None = None
+    energy_drift_per_s: float | None = None
+
+
+@dataclass
+class Solution:
+    """The state on the output grid plus counters, status and message.
+
+    ``y`` has shape (len(t), 4) with columns (x, y, ẋ, ẏ) in m and m/s; rows after a divergence or failure are
+    NaN. Counters are ``None`` where the integrator or library does not report them.
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    status: str = STATUS_OK
+    message: str = ""
+    nfev: int | None = None
+    njev: int | None = None
+    steps: int | None = None
+    rejected_steps: int | None = None
+    step_size_s: float | None = None
+    tolerance: float | None = None
+    streamed: StreamedMetrics | None = None
+    extra: dict = field(default_factory=dict)
+
+    @classmethod
+    def failure(cls, t: np.ndarray, message: str, status: str = STATUS_FAILED) -> "Solution":
+        return cls(t=t, y=np.full((t.size, 4), np.nan), status=status, message=message)
+
+
+class Integrator(ABC):
+    """Base class of every integrator.
+
+    Class attributes each integrator declares (shown in tables and checked by the tests):
+        name: registry key, e.g. ``"rk4"``.
+        family: grouping for colours and thresholds, e.g. ``"runge-kutta"``.
+        order: classical order of accuracy (``None`` where it varies, e.g. variable-order multistep).
+        stages: right-hand-side evaluations per step for fixed-step schemes (``None`` for adaptive ones).
+        adaptive: ``True`` if driven by a tolerance, ``False`` if by a step size.
+        stability_limit_kh: largest stable k·h on the undamped oscillator ẍ = −k²x (``None`` if unstable
+            for every h or not applicable).
+        reference: where the method is described.
+    """
+
+    name: ClassVar[str]
+    family: ClassVar[str]
+    order: ClassVar[int | None]
+    stages: ClassVar[int | None] = None
+    adaptive: ClassVar[bool]
+    stability_limit_kh: ClassVar[float | None] = None
+    reference: ClassVar[str]
+
+    def solve(self, problem: Problem, *, step_s: float | None = None, tol: float | None = None,
+              monitor: bool = True) -> Solution:
+        """Integrate ``problem``; never raises for a run that fails, only for a malformed request.
+
+        Args:
+            problem: model, parameters and output grid.
+            step_s: step size in s (fixed-step integrators only).
+            tol: relative (and scaled absolute) tolerance in (0, 1) (adaptive integrators only).
+            monitor: compute streamed metrics (energy extrema, turning points) where the integrator can.
+        """
+        self.validate_setting(step_s=step_s, tol=tol)
+        try:
+            with quiet_native_output():
+                solution = self._solve(problem, step_s=step_s, tol=tol, monitor=monitor)
+        except Exception as exc:  # any library or numerical failure becomes a row, not a crash
+            return Solution.failure(problem.t_out, f"{type(exc).__name__}: {exc}")
+        if solution.status == STATUS_OK and not np.all(np.isfinite(solution.y)):
+            solution.status = STATUS_DIVERGED
+            solution.message = solution.message or "state became non-finite"
+        if solution.nfev is None and self.stages is not None and solution.steps is not None:
+            solution.nfev = self.stages * solution.steps
+        solution.step_size_s = solution.step_size_s if solution.step_size_s is not None else step_s
+        solution.tolerance = tol
+        return solution
+
+    def validate_setting(self, *, step_s: float | None, tol: float | None) -> None:
+        """Raise ``ValueError`` for a setting this integrator cannot take."""
+        if self.adaptive:
+            if step_s is not None:
+                raise ValueError(f"{self.name} is adaptive: give a tolerance, not a step size")
+            if tol is None or not (isinstance(tol, (int, float)) and 0.0 < tol < 1.0):
+                raise ValueError(f"{self.name}: tolerance must lie in (0, 1), got {tol!r}")
+        else:
+            if tol is not None:
+                raise ValueError(f"{self.name} is a fixed-step method: give a step size, not a tolerance")
+            if step_s is None or not (isinstance(step_s, (int, float)) and math.isfinite(step_s) and step_s > 0):
+                raise ValueError(f"{self.name}: step size must be a finite number > 0 s, got {step_s!r}")
+
+    @abstractmethod
+    def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
+        """Integrate; may raise (the framework turns exceptions into ``failed`` solutions)."""
+
+    def describe(self) -> dict:
+        """The declared facts of this integrator as plain data."""
+        return {
+            "name": self.name,
+            "family": self.family,
+            "order": self.order,
+            "stages": self.stages,
+            "adaptive": self.adaptive,
+            "stability_limit_kh": self.stability_limit_kh,
+            "reference": self.reference,
+        }
+
+
+@contextlib.contextmanager
+def quiet_native_output() -> Iterator[None]:
+    """Redirect the process's stdout and stderr file descriptors to /dev/null for the duration, so that
+    native libraries (SUNDIALS warnings) do not write over the terminal or a progress bar. Python-level
+    writes are flushed first; nothing is redirected when the descriptors are not available."""
+    try:
+        fds = (sys.stdout.fileno(), sys.stderr.fileno())
+    except (AttributeError, OSError, ValueError):
+        yield
+        return
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(fd) for fd in fds]
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        for fd in fds:
+            os.dup2(devnull, fd)
+        yield
+    finally:
+        for fd, copy in zip(fds, saved):
+            os.dup2(copy, fd)
+            os.close(copy)
+        os.close(devnull)

@@ -1,0 +1,165 @@
+"""Compiled fixed-step machinery shared by every fixed-step scheme.
+
+A scheme supplies one numba step function ``step(x, y, vx, vy, h, p) -> (x, y, vx, vy)`` built from the model
+(``FixedStepIntegrator.make_step``). This module wraps it in one compiled loop that
+
+* runs n steps with scalars only (no allocation per step), so 10⁸ steps need memory for the output grid only;
+* writes the state every ``stride`` steps into a preallocated output array (the output grid);
+* streams the verdict ingredients when ``monitor`` is on: the max relative energy error, the least-squares
+  drift slope of the relative energy error (Welford's online covariance, stable over 10⁸ samples), and
+  the turning points (maxima of the radius: r·ṙ changes sign from + to −, located by linear interpolation of
+  r·ṙ and a cubic Hermite interpolation of the position, PHYSICS.md "Measuring the precession rate");
+* stops at the first non-finite state or when the bob leaves a bound (diverged).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from abc import abstractmethod
+from typing import Callable, ClassVar
+
+import numpy as np
+from numba import njit
+
+from integrators.base import STATUS_DIVERGED, Integrator, Problem, Solution, StreamedMetrics
+from models import Model
+
+DIVERGENCE_RADIUS_FACTOR = 1.0e3
+"""A run is declared diverged when the bob is farther than this many string lengths from the vertical."""
+
+STATUS_CODE_DIVERGED = 1
+
+
+def build_kernel(step: Callable, energy: Callable) -> Callable:
+    """Compile the fixed-step loop around ``step`` with the model's ``energy`` for streamed metrics."""
+
+    @njit(cache=True)
+    def kernel(state0, p, h, n_steps, stride, out, monitor, turning, radius_bound):
+        x = state0[0]
+        y = state0[1]
+        vx = state0[2]
+        vy = state0[3]
+        out[0, 0] = x
+        out[0, 1] = y
+        out[0, 2] = vx
+        out[0, 3] = vy
+        energy0 = energy(x, y, vx, vy, p)
+        energy_scale = abs(energy0) if energy0 != 0.0 else 1.0
+        max_rel = 0.0
+        # Welford accumulators for the slope of relative energy error against time.
+        count = 0.0
+        mean_t = 0.0
+        mean_e = 0.0
+        co_te = 0.0
+        var_t = 0.0
+        radial = x * vx + y * vy
+        n_turning = 0
+        bound2 = radius_bound * radius_bound
+        status = 0
+        steps_done = 0
+        for i in range(1, n_steps + 1):
+            xn, yn, vxn, vyn = step(x, y, vx, vy, h, p)
+            r2 = xn * xn + yn * yn
+            if not (r2 <= bound2) or not (abs(vxn) + abs(vyn) < 1.0e300):
+                status = 1
+                break
+            steps_done = i
+            if monitor:
+                t = i * h
+                rel = (energy(xn, yn, vxn, vyn, p) - energy0) / energy_scale
+                if abs(rel) > max_rel:
+                    max_rel = abs(rel)
+                count += 1.0
+                dt = t - mean_t
+                mean_t += dt / count
+                mean_e += (rel - mean_e) / count
+                co_te += dt * (rel - mean_e)
+                var_t += dt * (t - mean_t)
+                radial_new = xn * vxn + yn * vyn
+                if radial > 0.0 and radial_new <= 0.0 and n_turning < turning.shape[0]:
+                    theta = radial / (radial - radial_new)
+                    # cubic Hermite basis on [0, 1]
+                    h00 = (1.0 + 2.0 * theta) * (1.0 - theta) * (1.0 - theta)
+                    h10 = theta * (1.0 - theta) * (1.0 - theta)
+                    h01 = theta * theta * (3.0 - 2.0 * theta)
+                    h11 = theta * theta * (theta - 1.0)
+                    turning[n_turning, 0] = (i - 1 + theta) * h
+                    turning[n_turning, 1] = h00 * x + h10 * h * vx + h01 * xn + h11 * h * vxn
+                    turning[n_turning, 2] = h00 * y + h10 * h * vy + h01 * yn + h11 * h * vyn
+                    n_turning += 1
+                radial = radial_new
+            x = xn
+            y = yn
+            vx = vxn
+            vy = vyn
+            if i % stride == 0:
+                row = i // stride
+                out[row, 0] = x
+                out[row, 1] = y
+                out[row, 2] = vx
+                out[row, 3] = vy
+        slope = co_te / var_t if var_t > 0.0 else 0.0
+        return status, steps_done, n_turning, max_rel, slope
+
+    return kernel
+
+
+def uniform_output_stride(t_out: np.ndarray, step_s: float) -> tuple[int, float]:
+    """Steps per output interval and the effective step (s) for a uniform grid starting at 0.
+
+    The step is shortened (never lengthened) so that each output interval holds a whole number of steps;
+    the effective step is reported with the solution.
+    """
+    spacing = t_out[1] - t_out[0]
+    if t_out[0] != 0.0 or not np.allclose(np.diff(t_out), spacing, rtol=1e-9, atol=0.0):
+        raise ValueError("fixed-step integrators need a uniform output grid starting at t = 0")
+    stride = max(1, math.ceil(spacing / step_s * (1.0 - 1e-12)))
+    return stride, spacing / stride
+
+
+class FixedStepIntegrator(Integrator):
+    """Base of the compiled fixed-step schemes: a subclass only builds its numba step function."""
+
+    adaptive: ClassVar[bool] = False
+
+    @abstractmethod
+    def make_step(self, model: Model) -> Callable:
+        """A numba function ``(x, y, vx, vy, h, p) -> (x, y, vx, vy)`` advancing the model's state by h."""
+
+    @functools.lru_cache(maxsize=None)
+    def kernel(self, model: Model) -> Callable:
+        """The compiled loop for this scheme and model (compiled on first use, cached on disk by numba)."""
+        return build_kernel(self.make_step(model), model.numba_energy)
+
+    def compile(self, model: Model) -> None:
+        """Compile (or load from numba's cache) the loop for ``model`` with a one-step run."""
+        p = np.zeros(7)
+        p[1] = p[2] = 1.0
+        out = np.empty((2, 4))
+        self.kernel(model)(np.array([0.1, 0.0, 0.0, 0.0]), p, 0.1, 1, 1, out, True, np.empty((1, 3)), 1.0e3)
+
+    def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
+        stride, h = uniform_output_stride(problem.t_out, step_s)
+        n_out = problem.t_out.size
+        n_steps = stride * (n_out - 1)
+        out = np.full((n_out, 4), np.nan)
+        periods = problem.t_end_s / problem.params.small_swing_period_s
+        turning = np.empty((int(2.2 * periods) + 16 if monitor else 0, 3))
+        radius_bound = DIVERGENCE_RADIUS_FACTOR * problem.params.length_m
+        status, steps_done, n_turning, max_rel, slope = self.kernel(problem.model)(
+            problem.initial_state, problem.parameter_vector, h, n_steps, stride, out, monitor, turning,
+            radius_bound,
+        )
+        solution = Solution(t=problem.t_out, y=out, steps=steps_done, step_size_s=h)
+        if status == STATUS_CODE_DIVERGED:
+            solution.status = STATUS_DIVERGED
+            solution.message = (
+                f"diverged after {steps_done} of {n_steps} steps (t = {steps_done * h:.6g} s): state non-finite "
+                f"or farther than {DIVERGENCE_RADIUS_FACTOR:g} L from the vertical"
+            )
+        if monitor:
+            solution.streamed = StreamedMetrics(
+                energy_max_rel_error=max_rel, energy_drift_per_s=slope, turning_points=turning[:n_turning].copy()
+            )
+        return solution

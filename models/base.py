@@ -1,0 +1,252 @@
+"""The model base: one force source per model, and everything derived from it (written once, here).
+
+A model file writes its equations once, as plain arithmetic over a passed-in math namespace ``m``:
+
+    free_force(m, x, y, z, vx, vy, vz, p) -> (fx, fy, fz)    force per unit mass before any constraint
+    energy(m, x, y, vx, vy, p) -> float                     the conserved (or monitored) quantity
+
+``p`` is the parameter vector of ``models.parameters`` (same layout for every model). The model declares its
+geometry: ``"plane"`` (state moves in the horizontal plane; z ignored) or ``"sphere"`` (bob on a sphere of
+radius L, z = −√(L² − x² − y²) below the pivot). From that one source this module derives
+
+* the right-hand side of the first-order system in the state (x, y, ẋ, ẏ) (``acceleration``), with the
+  string's constraint force for the sphere (PHYSICS.md "Models" 4, d'Alembert's principle);
+* the split a rotating-frame Verlet needs (PHYSICS.md "Verlet with a Coriolis force", option b): the
+  Coriolis rotation vector, the position-only kick −∇U(r) = F(r, 0) + ω×(ω×r) acting on the canonical
+  momentum p = ṙ + ω×r, and, for non-Hamiltonian models only, the remaining velocity-dependent force
+  G(r, ṙ) = F(r, ṙ) − F(r, 0) + 2ω×ṙ;
+* numba-compiled versions (``njit(cache=True)``, math namespace = the ``math`` module) for the fixed-step
+  loops, scipy and CVODE, and heyoka expressions (math namespace = heyoka's functions, parameters =
+  ``heyoka.par[i]``) for the Taylor integrator.
+
+No equation is written twice: the compiled and the symbolic forms are the same Python source run over two
+namespaces.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import types
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from numba import njit
+from numba.extending import register_jitable
+
+from models.parameters import P_LENGTH, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z, PARAMETER_VECTOR_NAMES
+
+STATE_NAMES = ("x", "y", "vx", "vy")
+"""Every model's state: horizontal position (m) and velocity (m/s) in the rotating (South, East, Up) frame."""
+
+
+@register_jitable
+def sphere_height(m, x, y, vx, vy, p):
+    """Height z = −√(L² − x² − y²) (m) of a bob hanging below the pivot and its rate ż = −(xẋ + yẏ)/z (m/s)."""
+    length = p[P_LENGTH]
+    z = -m.sqrt(length * length - x * x - y * y)
+    return z, -(x * vx + y * vy) / z
+
+
+@register_jitable
+def plane_lift(m, x, y, vx, vy, p):
+    """Planar models live in the horizontal plane: z = ż = 0."""
+    return 0.0, 0.0
+
+
+@register_jitable
+def plane_project(x, y, z, vx, vy, vz, fx, fy, fz, p):
+    """Planar models: the horizontal components of the force are the acceleration."""
+    return fx, fy
+
+
+@register_jitable
+def sphere_project(x, y, z, vx, vy, vz, fx, fy, fz, p):
+    """Bob on a sphere: r̈ = F + μr with μ = −(|ṙ|² + r·F)/L² keeping |r| = L (PHYSICS.md "Models" 4)."""
+    length = p[P_LENGTH]
+    mu = -(vx * vx + vy * vy + vz * vz + x * fx + y * fy + z * fz) / (length * length)
+    return fx + mu * x, fy + mu * y
+
+
+def compose_acceleration(free_force: Callable, lift: Callable, project: Callable) -> Callable:
+    """(ẍ, ÿ) = project(F(lift(x, y, ẋ, ẏ))): the one composition used both by numba and by heyoka."""
+
+    def acceleration(m, x, y, vx, vy, p):
+        z, vz = lift(m, x, y, vx, vy, p)
+        fx, fy, fz = free_force(m, x, y, z, vx, vy, vz, p)
+        return project(x, y, z, vx, vy, vz, fx, fy, fz, p)
+
+    return acceleration
+
+
+def heyoka_math() -> types.SimpleNamespace:
+    """The math namespace in which model sources build heyoka expressions."""
+    import heyoka
+
+    return types.SimpleNamespace(sqrt=heyoka.sqrt, sin=heyoka.sin, cos=heyoka.cos)
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """A Foucault-pendulum model: its force source, geometry and conserved quantity.
+
+    Attributes:
+        name: registry key (``models.get_model``).
+        title: one line for tables and charts.
+        geometry: ``"plane"`` or ``"sphere"``.
+        free_force: the model's force source (see module docstring).
+        energy: source of the conserved quantity (J/kg), or of the monitored energy where none is conserved.
+        energy_name: formula of ``energy`` for tables.
+        conserves_energy: whether ``energy`` is an exact invariant of the model.
+        hamiltonian: whether every velocity-dependent force is the Coriolis force of ``coriolis_vector``.
+    """
+
+    name: str
+    title: str
+    geometry: str
+    free_force: Callable
+    energy: Callable
+    energy_name: str
+    conserves_energy: bool
+    hamiltonian: bool
+
+    def __post_init__(self) -> None:
+        if self.geometry not in ("plane", "sphere"):
+            raise ValueError(f"geometry must be 'plane' or 'sphere', got {self.geometry!r}")
+
+    # --- structure --------------------------------------------------------------------------------------
+    @property
+    def constrained_to_sphere(self) -> bool:
+        return self.geometry == "sphere"
+
+    def _geometry(self) -> tuple[Callable, Callable]:
+        return (sphere_height, sphere_project) if self.constrained_to_sphere else (plane_lift, plane_project)
+
+    def coriolis_vector(self, p: np.ndarray) -> tuple[float, float, float]:
+        """The rotation vector (rad/s) whose Coriolis force −2ω×ṙ the model contains: full ω on the sphere,
+        its vertical part (0, 0, Ω_E sin φ) in the planar models."""
+        if self.constrained_to_sphere:
+            return float(p[P_OMEGA_X]), float(p[P_OMEGA_Y]), float(p[P_OMEGA_Z])
+        return 0.0, 0.0, float(p[P_OMEGA_Z])
+
+    # --- plain Python evaluation (any namespace) ------------------------------------------------------------
+    def acceleration(self, m, x, y, vx, vy, p):
+        """(ẍ, ÿ) from the model's source over math namespace ``m``."""
+        return compose_acceleration(self.free_force, *self._geometry())(m, x, y, vx, vy, p)
+
+    # --- numba ----------------------------------------------------------------------------------------------
+    @functools.cached_property
+    def numba_free_force(self) -> Callable:
+        return njit(cache=True)(self.free_force)
+
+    @functools.cached_property
+    def numba_acceleration(self) -> Callable:
+        """njit ``(x, y, vx, vy, p) -> (ax, ay)``."""
+        source = njit(cache=True)(compose_acceleration(self.numba_free_force, *self._geometry()))
+
+        @njit(cache=True)
+        def acceleration(x, y, vx, vy, p):
+            return source(math, x, y, vx, vy, p)
+
+        return acceleration
+
+    @functools.cached_property
+    def numba_energy(self) -> Callable:
+        """njit ``(x, y, vx, vy, p) -> float``."""
+        source = njit(cache=True)(self.energy)
+
+        @njit(cache=True)
+        def energy(x, y, vx, vy, p):
+            return source(math, x, y, vx, vy, p)
+
+        return energy
+
+    @functools.cached_property
+    def numba_kick(self) -> Callable:
+        """njit ``(x, y, z, p) -> (fx, fy, fz)``: −∇U(r) = F(r, 0) + ω_c×(ω_c×r), the position-only force on
+        the canonical momentum p = ṙ + ω_c×r (ω_c = ``coriolis_vector``; planar models: z = 0)."""
+        force = self.numba_free_force
+        full_rotation = self.constrained_to_sphere
+
+        @njit(cache=True)
+        def kick(x, y, z, p):
+            wx = p[P_OMEGA_X] if full_rotation else 0.0
+            wy = p[P_OMEGA_Y] if full_rotation else 0.0
+            wz = p[P_OMEGA_Z]
+            fx, fy, fz = force(math, x, y, z, 0.0, 0.0, 0.0, p)
+            wrx = wy * z - wz * y
+            wry = wz * x - wx * z
+            wrz = wx * y - wy * x
+            return fx + wy * wrz - wz * wry, fy + wz * wrx - wx * wrz, fz + wx * wry - wy * wrx
+
+        return kick
+
+    @functools.cached_property
+    def numba_remainder(self) -> Callable:
+        """njit ``(x, y, z, vx, vy, vz, p) -> (gx, gy, gz)``: G(r, ṙ) = F(r, ṙ) − F(r, 0) + 2ω_c×ṙ, the
+        velocity-dependent force that is not Coriolis (identically zero for Hamiltonian models)."""
+        force = self.numba_free_force
+        full_rotation = self.constrained_to_sphere
+
+        @njit(cache=True)
+        def remainder(x, y, z, vx, vy, vz, p):
+            wx = p[P_OMEGA_X] if full_rotation else 0.0
+            wy = p[P_OMEGA_Y] if full_rotation else 0.0
+            wz = p[P_OMEGA_Z]
+            fx, fy, fz = force(math, x, y, z, vx, vy, vz, p)
+            f0x, f0y, f0z = force(math, x, y, z, 0.0, 0.0, 0.0, p)
+            return (
+                fx - f0x + 2.0 * (wy * vz - wz * vy),
+                fy - f0y + 2.0 * (wz * vx - wx * vz),
+                fz - f0z + 2.0 * (wx * vy - wy * vx),
+            )
+
+        return remainder
+
+    @functools.cached_property
+    def numba_rhs_into(self) -> Callable:
+        """njit ``(t, y, out, p) -> None``: the first-order system dy/dt written into ``out`` (CVODE style)."""
+        acceleration = self.numba_acceleration
+
+        @njit(cache=True)
+        def rhs_into(t, y, out, p):
+            ax, ay = acceleration(y[0], y[1], y[2], y[3], p)
+            out[0] = y[2]
+            out[1] = y[3]
+            out[2] = ax
+            out[3] = ay
+
+        return rhs_into
+
+    @functools.cached_property
+    def numba_rhs(self) -> Callable:
+        """njit ``(t, y, p) -> ndarray``: the first-order system dy/dt as a new array (scipy style)."""
+        rhs_into = self.numba_rhs_into
+
+        @njit(cache=True)
+        def rhs(t, y, p):
+            out = np.empty(4)
+            rhs_into(t, y, out, p)
+            return out
+
+        return rhs
+
+    # --- heyoka ---------------------------------------------------------------------------------------------
+    def heyoka_system(self) -> list:
+        """The first-order system as heyoka (variable, expression) pairs, parameters as ``heyoka.par[i]``
+        in the layout of ``PARAMETER_VECTOR_NAMES``."""
+        import heyoka
+
+        x, y, vx, vy = heyoka.make_vars(*STATE_NAMES)
+        pars = [heyoka.par[i] for i in range(len(PARAMETER_VECTOR_NAMES))]
+        ax, ay = self.acceleration(heyoka_math(), x, y, vx, vy, pars)
+        return [(x, vx), (y, vy), (vx, ax), (vy, ay)]
+
+    def heyoka_energy(self):
+        """The energy source as one heyoka expression in the state variables and ``heyoka.par``."""
+        import heyoka
+
+        x, y, vx, vy = heyoka.make_vars(*STATE_NAMES)
+        pars = [heyoka.par[i] for i in range(len(PARAMETER_VECTOR_NAMES))]
+        return self.energy(heyoka_math(), x, y, vx, vy, pars)
