@@ -1,0 +1,1 @@
+"""The benchmark side of foucault-bench: scenes, matrices, the runner, the results store, checks and perf."""

@@ -1,0 +1,64 @@
+"""The ``foucault-bench`` command line: one sub-command per module, imported only when used.
+
+Each sub-command module provides ``add_arguments(parser)`` and ``main(args) -> int``. Bad input raises
+``bench.errors.InputError``, which is printed as one line per problem with exit status 2 and no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from bench.errors import InputError
+
+COMMANDS: dict[str, tuple[str, str]] = {
+    "run": ("bench.commands.run", "run a benchmark matrix and store one row per run"),
+    "results": ("bench.commands.results", "list, export and compare stored runs"),
+    "check": ("bench.check", "check stored or fresh results against a thresholds file (CI gate)"),
+    "perf": ("bench.perf", "measure the suite's own speed against C loops and bare libraries"),
+    "report": ("reports.build", "build the HTML/Markdown report from a results database"),
+    "seed": ("reports.seed", "reproduce and correct the seed note's figures"),
+    "simulate": ("reports.simulate", "interactive simulation (or --save an animation)"),
+}
+
+
+def _module(module_name: str):
+    return importlib.import_module(module_name)
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    parser = build_parser_for(argv)
+    args = parser.parse_args(argv)
+    try:
+        return int(_module(args._module).main(args) or 0)
+    except InputError as error:
+        for problem in error.problems:
+            print(f"foucault-bench {args.command}: error: {problem}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+def build_parser_for(argv: list[str]) -> argparse.ArgumentParser:
+    """The parser with only the chosen sub-command's arguments loaded (all of them for a top-level --help)."""
+    parser = argparse.ArgumentParser(
+        prog="foucault-bench",
+        description="Verification and benchmark suite for ODE integrators on the Foucault pendulum. "
+        "Latitudes are geographic (φ, degrees north); the textbook precession is −Ω_E sin φ, "
+        "counter-clockwise about local up positive.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    chosen = argv[0] if argv else None
+    for name, (module_name, help_text) in COMMANDS.items():
+        command_parser = sub.add_parser(name, help=help_text, description=help_text)
+        command_parser.set_defaults(_module=module_name)
+        if name == chosen:
+            _module(module_name).add_arguments(command_parser)
+    return parser
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,11 @@
+"""Errors the command line reports without a traceback (exit status 2)."""
+
+from __future__ import annotations
+
+
+class InputError(Exception):
+    """Bad user input (matrix, thresholds, arguments): one message per problem, nothing has run yet."""
+
+    def __init__(self, problems: list[str] | str):
+        self.problems = [problems] if isinstance(problems, str) else list(problems)
+        super().__init__("\n".join(self.problems))

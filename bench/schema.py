@@ -1,0 +1,82 @@
+"""The results table: one row per run (scene × integrator × setting), its columns, types and units.
+
+This is the contract between the runner (which writes rows), the results store (SQLite), the reports and
+the threshold checks. Every column is documented here once; the README's column table is generated from
+``COLUMNS`` (``python -m bench.schema``). Errors are dimensionless unless a unit is given.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Column:
+    name: str
+    sql_type: str  # TEXT, REAL, INTEGER
+    unit: str
+    description: str
+
+
+COLUMNS: tuple[Column, ...] = (
+    # identity and setting
+    Column("run_key", "TEXT", "", "hash of scene, integrator, setting and code version; --resume skips stored keys"),
+    Column("matrix_id", "TEXT", "", "id of the matrix run that produced the row (provenance table)"),
+    Column("scene", "TEXT", "", "scene name"),
+    Column("model", "TEXT", "", "model name (linear, seed_planar, spherical)"),
+    Column("integrator", "TEXT", "", "integrator name (registry key)"),
+    Column("family", "TEXT", "", "integrator family (colours, thresholds)"),
+    Column("step_s", "REAL", "s", "effective fixed step (NULL for adaptive runs)"),
+    Column("kh", "REAL", "", "k·h, the step in units of 1/k = √(L/g) (NULL for adaptive runs)"),
+    Column("tol", "REAL", "", "tolerance (NULL for fixed-step runs)"),
+    Column("duration_s", "REAL", "s", "integrated time span"),
+    Column("n_out", "INTEGER", "", "points on the output grid (the same for every integrator of a scene)"),
+    # outcome
+    Column("status", "TEXT", "", "ok / diverged / failed"),
+    Column("message", "TEXT", "", "why a run diverged or failed (empty when ok)"),
+    # verdicts
+    Column("energy_conserved", "INTEGER", "", "1 if the model conserves its energy (Jacobi) exactly, else 0"),
+    Column("energy_max_rel_error", "REAL", "", "max over the output grid of |E − E₀|/|E₀|"),
+    Column("energy_drift_per_s", "REAL", "1/s", "least-squares slope of (E − E₀)/|E₀| against t"),
+    Column("energy_max_rel_error_steps", "REAL", "", "max over every step (streamed; fixed-step runs only)"),
+    Column("precession_rate_rad_s", "REAL", "rad/s", "measured swing-plane rate, counter-clockwise about up positive"),
+    Column("precession_rate_error", "REAL", "", "|rate − (−Ω_E sin φ)| / (Ω_E |sin φ|) (÷ Ω_E at the equator)"),
+    Column("precession_rate_ref_error", "REAL", "", "|rate − reference rate| / (Ω_E |sin φ|), the integrator's own error"),
+    Column("analytic_gap_exact", "REAL", "", "max |r − r_exact linear| / A over the output grid"),
+    Column("analytic_gap_seed", "REAL", "", "max |r − r_seed eqs. 14-15| / A over the output grid"),
+    Column("reference_error", "REAL", "", "max |r − r_reference| / A over the output grid (real128 heyoka reference)"),
+    # cost
+    Column("wall_time_s", "REAL", "s", "median wall time of the timed repeats (compile excluded)"),
+    Column("wall_time_spread_s", "REAL", "s", "max − min of the timed repeats"),
+    Column("repeats", "INTEGER", "", "timed repeats after the warm-up"),
+    Column("compile_time_s", "REAL", "s", "first-call time minus median run time (JIT compile or cache load)"),
+    Column("nfev", "INTEGER", "", "right-hand-side evaluations (Taylor steps for heyoka)"),
+    Column("njev", "INTEGER", "", "Jacobian evaluations where reported"),
+    Column("steps", "INTEGER", "", "accepted steps"),
+    Column("rejected_steps", "INTEGER", "", "rejected steps where the library reports them"),
+    Column("peak_rss_mb", "REAL", "MB", "peak resident memory of the worker after the run"),
+)
+
+COLUMN_NAMES: tuple[str, ...] = tuple(column.name for column in COLUMNS)
+VERDICT_COLUMNS: tuple[str, ...] = (
+    "energy_max_rel_error",
+    "energy_drift_per_s",
+    "energy_max_rel_error_steps",
+    "precession_rate_error",
+    "precession_rate_ref_error",
+    "analytic_gap_exact",
+    "analytic_gap_seed",
+    "reference_error",
+)
+"""Accuracy columns: deterministic, identical bit for bit for the same matrix on the same machine."""
+
+
+def markdown_table() -> str:
+    """The column table for the README."""
+    lines = ["| column | unit | meaning |", "|---|---|---|"]
+    lines += [f"| `{c.name}` | {c.unit or '–'} | {c.description} |" for c in COLUMNS]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    print(markdown_table())
