@@ -135,6 +135,7 @@ class Integrator(ABC):
             monitor: compute streamed metrics (energy extrema, turning points) where the integrator can.
         """
         self.validate_setting(step_s=step_s, tol=tol)
+        self.validate_problem(problem, step_s=step_s)
         try:
             with quiet_native_output():
                 solution = self._solve(problem, step_s=step_s, tol=tol, monitor=monitor)
@@ -161,6 +162,9 @@ class Integrator(ABC):
                 raise ValueError(f"{self.name} is a fixed-step method: give a step size, not a tolerance")
             if step_s is None or not (isinstance(step_s, (int, float)) and math.isfinite(step_s) and step_s > 0):
                 raise ValueError(f"{self.name}: step size must be a finite number > 0 s, got {step_s!r}")
+
+    def validate_problem(self, problem: Problem, *, step_s: float | None) -> None:
+        """Raise ``ValueError`` for a problem this integrator cannot take (e.g. an output grid it cannot hit)."""
 
     @abstractmethod
     def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:

@@ -7,8 +7,8 @@ A scheme supplies one numba step function ``step(x, y, vx, vy, h, p) -> (x, y, v
 * writes the state every ``stride`` steps into a preallocated output array (the output grid);
 * streams the verdict ingredients when ``monitor`` is on: the max relative energy error, the least-squares
   drift slope of the relative energy error (Welford's online covariance, stable over 10⁸ samples), and
-  the turning points (maxima of the radius: r·ṙ changes sign from + to −, located by linear interpolation of
-  r·ṙ and a cubic Hermite interpolation of the position, PHYSICS.md "Measuring the precession rate");
+  the turning points (maxima of the radius: r·ṙ changes sign from + to −, located on the cubic Hermite
+  interpolant of the step, PHYSICS.md "Measuring the precession rate");
 * stops at the first non-finite state or when the bob leaves a bound (diverged).
 """
 
@@ -29,6 +29,35 @@ DIVERGENCE_RADIUS_FACTOR = 1.0e3
 """A run is declared diverged when the bob is farther than this many string lengths from the vertical."""
 
 STATUS_CODE_DIVERGED = 1
+
+
+@njit(cache=True)
+def _hermite(theta, h, p0, v0, p1, v1):
+    """Cubic Hermite interpolant on one step (θ ∈ [0, 1]) and its first two θ-derivatives."""
+    t2 = theta * theta
+    t3 = t2 * theta
+    value = (2 * t3 - 3 * t2 + 1) * p0 + (t3 - 2 * t2 + theta) * h * v0 + (-2 * t3 + 3 * t2) * p1 + (t3 - t2) * h * v1
+    slope = (6 * t2 - 6 * theta) * p0 + (3 * t2 - 4 * theta + 1) * h * v0 + (6 * theta - 6 * t2) * p1 + (3 * t2 - 2 * theta) * h * v1
+    curve = (12 * theta - 6) * (p0 - p1) + (6 * theta - 4) * h * v0 + (6 * theta - 2) * h * v1
+    return value, slope, curve
+
+
+@njit(cache=True)
+def _turning_point(x0, y0, vx0, vy0, x1, y1, vx1, vy1, h, radial0, radial1):
+    """Maximum of the radius inside one step: root of s(θ) = P(θ)·P'(θ) for the cubic Hermite interpolant P,
+    from the linear guess θ = s₀/(s₀ − s₁) refined by three Newton steps (Hairer, Nørsett & Wanner,
+    Solving ODEs I, §II.6 on dense output and event location). Returns (θ, x, y)."""
+    theta = radial0 / (radial0 - radial1)
+    for _ in range(3):
+        px, sx, cx = _hermite(theta, h, x0, vx0, x1, vx1)
+        py, sy, cy = _hermite(theta, h, y0, vy0, y1, vy1)
+        derivative = sx * sx + sy * sy + px * cx + py * cy
+        if derivative == 0.0:
+            break
+        theta = min(1.0, max(0.0, theta - (px * sx + py * sy) / derivative))
+    px, _, _ = _hermite(theta, h, x0, vx0, x1, vx1)
+    py, _, _ = _hermite(theta, h, y0, vy0, y1, vy1)
+    return theta, px, py
 
 
 def build_kernel(step: Callable, energy: Callable) -> Callable:
@@ -78,15 +107,10 @@ def build_kernel(step: Callable, energy: Callable) -> Callable:
                 var_t += dt * (t - mean_t)
                 radial_new = xn * vxn + yn * vyn
                 if radial > 0.0 and radial_new <= 0.0 and n_turning < turning.shape[0]:
-                    theta = radial / (radial - radial_new)
-                    # cubic Hermite basis on [0, 1]
-                    h00 = (1.0 + 2.0 * theta) * (1.0 - theta) * (1.0 - theta)
-                    h10 = theta * (1.0 - theta) * (1.0 - theta)
-                    h01 = theta * theta * (3.0 - 2.0 * theta)
-                    h11 = theta * theta * (theta - 1.0)
+                    theta, tx, ty = _turning_point(x, y, vx, vy, xn, yn, vxn, vyn, h, radial, radial_new)
                     turning[n_turning, 0] = (i - 1 + theta) * h
-                    turning[n_turning, 1] = h00 * x + h10 * h * vx + h01 * xn + h11 * h * vxn
-                    turning[n_turning, 2] = h00 * y + h10 * h * vy + h01 * yn + h11 * h * vyn
+                    turning[n_turning, 1] = tx
+                    turning[n_turning, 2] = ty
                     n_turning += 1
                 radial = radial_new
             x = xn
@@ -138,6 +162,9 @@ class FixedStepIntegrator(Integrator):
         p[1] = p[2] = 1.0
         out = np.empty((2, 4))
         self.kernel(model)(np.array([0.1, 0.0, 0.0, 0.0]), p, 0.1, 1, 1, out, True, np.empty((1, 3)), 1.0e3)
+
+    def validate_problem(self, problem: Problem, *, step_s: float | None) -> None:
+        uniform_output_stride(problem.t_out, step_s)
 
     def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
         stride, h = uniform_output_stride(problem.t_out, step_s)
