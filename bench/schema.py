@@ -36,9 +36,9 @@ COLUMNS: tuple[Column, ...] = (
     Column("message", "TEXT", "", "why a run diverged or failed (empty when ok)"),
     # verdicts
     Column("energy_conserved", "INTEGER", "", "1 if the model conserves its energy (Jacobi) exactly, else 0"),
-    Column("energy_max_rel_error", "REAL", "", "max over the output grid of |E − E₀|/|E₀|"),
-    Column("energy_drift_per_s", "REAL", "1/s", "least-squares slope of (E − E₀)/|E₀| against t"),
-    Column("energy_max_rel_error_steps", "REAL", "", "max over every step (streamed; fixed-step runs only)"),
+    Column("energy_max_rel_error", "REAL", "", "max over the output grid of |E − E₀|/(E₀ − E_rest), E_rest = energy of the bob at rest at the bottom"),
+    Column("energy_drift_per_s", "REAL", "1/s", "least-squares slope of (E − E₀)/(E₀ − E_rest) against t"),
+    Column("energy_max_rel_error_steps", "REAL", "", "the same max over every step (streamed; fixed-step runs only)"),
     Column("precession_rate_rad_s", "REAL", "rad/s", "measured swing-plane rate, counter-clockwise about up positive"),
     Column("precession_rate_error", "REAL", "", "|rate − (−Ω_E sin φ)| / (Ω_E |sin φ|) (÷ Ω_E at the equator)"),
     Column("precession_rate_ref_error", "REAL", "", "|rate − reference rate| / (Ω_E |sin φ|), the integrator's own error"),

@@ -16,7 +16,7 @@ from integrators.base import (
 from integrators.fixed_step import FixedStepIntegrator
 from integrators.registry import REGISTRY, get_integrator, load_plugins, register, unregister
 
-from integrators import explicit_euler, rk4, symplectic_euler, verlet  # noqa: E402,F401  (registration)
+from integrators import cvode, explicit_euler, heyoka_taylor, rk4, scipy_ivp, symplectic_euler, verlet  # noqa: E402,F401  (registration)
 
 load_plugins()
 

@@ -8,11 +8,10 @@ the seed note used; its claim that the energy error stays bounded is false for i
 
 from typing import Callable, ClassVar
 
-from numba import njit
-
 from integrators.fixed_step import FixedStepIntegrator
 from integrators.registry import register
 from models import Model
+from models.jit import jit
 
 
 @register
@@ -27,7 +26,7 @@ class ExplicitEuler(FixedStepIntegrator):
     def make_step(self, model: Model) -> Callable:
         acceleration = model.numba_acceleration
 
-        @njit(cache=True)
+        @jit
         def step(x, y, vx, vy, h, p):
             ax, ay = acceleration(x, y, vx, vy, p)
             return x + h * vx, y + h * vy, vx + h * ax, vy + h * ay

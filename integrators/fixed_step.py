@@ -1,7 +1,8 @@
 """Compiled fixed-step machinery shared by every fixed-step scheme.
 
 A scheme supplies one numba step function ``step(x, y, vx, vy, h, p) -> (x, y, vx, vy)`` built from the model
-(``FixedStepIntegrator.make_step``). This module wraps it in one compiled loop that
+(``FixedStepIntegrator.make_step``; ``p`` arrives as a tuple of floats in the layout of the parameter vector).
+This module wraps it in one compiled loop that
 
 * runs n steps with scalars only (no allocation per step), so 10⁸ steps need memory for the output grid only;
 * writes the state every ``stride`` steps into a preallocated output array (the output grid);
@@ -20,10 +21,14 @@ from abc import abstractmethod
 from typing import Callable, ClassVar
 
 import numpy as np
-from numba import njit
+from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from integrators.base import STATUS_DIVERGED, Integrator, Problem, Solution, StreamedMetrics
 from models import Model
+from models.jit import jit
+from models.parameters import PARAMETER_VECTOR_NAMES
+
+PARAMETER_COUNT = len(PARAMETER_VECTOR_NAMES)
 
 DIVERGENCE_RADIUS_FACTOR = 1.0e3
 """A run is declared diverged when the bob is farther than this many string lengths from the vertical."""
@@ -31,7 +36,7 @@ DIVERGENCE_RADIUS_FACTOR = 1.0e3
 STATUS_CODE_DIVERGED = 1
 
 
-@njit(cache=True)
+@jit
 def _hermite(theta, h, p0, v0, p1, v1):
     """Cubic Hermite interpolant on one step (θ ∈ [0, 1]) and its first two θ-derivatives."""
     t2 = theta * theta
@@ -42,7 +47,7 @@ def _hermite(theta, h, p0, v0, p1, v1):
     return value, slope, curve
 
 
-@njit(cache=True)
+@jit
 def _turning_point(x0, y0, vx0, vy0, x1, y1, vx1, vy1, h, radial0, radial1):
     """Maximum of the radius inside one step: root of s(θ) = P(θ)·P'(θ) for the cubic Hermite interpolant P,
     from the linear guess θ = s₀/(s₀ − s₁) refined by three Newton steps (Hairer, Nørsett & Wanner,
@@ -63,8 +68,11 @@ def _turning_point(x0, y0, vx0, vy0, x1, y1, vx1, vy1, h, radial0, radial1):
 def build_kernel(step: Callable, energy: Callable) -> Callable:
     """Compile the fixed-step loop around ``step`` with the model's ``energy`` for streamed metrics."""
 
-    @njit(cache=True)
-    def kernel(state0, p, h, n_steps, stride, out, monitor, turning, radius_bound):
+    @jit
+    def kernel(state0, parameter_vector, h, n_steps, stride, out, monitor, turning, radius_bound):
+        # The parameters as a tuple of scalars: unlike array elements they cannot alias the output arrays
+        # written in the loop, so LLVM hoists what the step computes from p and h alone out of the loop.
+        p = to_fixed_tuple(parameter_vector, PARAMETER_COUNT)
         x = state0[0]
         y = state0[1]
         vx = state0[2]
@@ -149,7 +157,8 @@ class FixedStepIntegrator(Integrator):
 
     @abstractmethod
     def make_step(self, model: Model) -> Callable:
-        """A numba function ``(x, y, vx, vy, h, p) -> (x, y, vx, vy)`` advancing the model's state by h."""
+        """A numba function ``(x, y, vx, vy, h, p) -> (x, y, vx, vy)`` advancing the model's state by h (``p``:
+        the parameter vector, passed by the loop as a tuple of floats; compile it with ``models.jit.jit``)."""
 
     @functools.lru_cache(maxsize=None)
     def kernel(self, model: Model) -> Callable:

@@ -7,11 +7,10 @@ boundary); the energy decays by about (kh)⁶/72 per step and the precession is 
 
 from typing import Callable, ClassVar
 
-from numba import njit
-
 from integrators.fixed_step import FixedStepIntegrator
 from integrators.registry import register
 from models import Model
+from models.jit import jit
 
 TWO_SQRT_TWO = 2.8284271247461903
 
@@ -28,7 +27,7 @@ class RK4(FixedStepIntegrator):
     def make_step(self, model: Model) -> Callable:
         acceleration = model.numba_acceleration
 
-        @njit(cache=True)
+        @jit
         def step(x, y, vx, vy, h, p):
             half = 0.5 * h
             k1ax, k1ay = acceleration(x, y, vx, vy, p)

@@ -9,11 +9,10 @@ its error is first order either way (Euler–Cromer; Cromer, Am. J. Phys. 49, 45
 
 from typing import Callable, ClassVar
 
-from numba import njit
-
 from integrators.fixed_step import FixedStepIntegrator
 from integrators.registry import register
 from models import Model
+from models.jit import jit
 
 
 @register
@@ -28,7 +27,7 @@ class SymplecticEuler(FixedStepIntegrator):
     def make_step(self, model: Model) -> Callable:
         acceleration = model.numba_acceleration
 
-        @njit(cache=True)
+        @jit
         def step(x, y, vx, vy, h, p):
             ax, ay = acceleration(x, y, vx, vy, p)
             vx_new = vx + h * ax

@@ -15,9 +15,9 @@ radius L, z = −√(L² − x² − y²) below the pivot). From that one source
   Coriolis rotation vector, the position-only kick −∇U(r) = F(r, 0) + ω×(ω×r) acting on the canonical
   momentum p = ṙ + ω×r, and, for non-Hamiltonian models only, the remaining velocity-dependent force
   G(r, ṙ) = F(r, ṙ) − F(r, 0) + 2ω×ṙ;
-* numba-compiled versions (``njit(cache=True)``, math namespace = the ``math`` module) for the fixed-step
-  loops, scipy and CVODE, and heyoka expressions (math namespace = heyoka's functions, parameters =
-  ``heyoka.par[i]``) for the Taylor integrator.
+* numba-compiled versions (``models.jit.jit``, cached on disk; math namespace = the ``math`` module) for
+  the fixed-step loops, scipy and CVODE, and heyoka expressions (math namespace = heyoka's functions,
+  parameters = ``heyoka.par[i]``) for the Taylor integrator.
 
 No equation is written twice: the compiled and the symbolic forms are the same Python source run over two
 namespaces.
@@ -32,16 +32,15 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from numba import njit
-from numba.extending import register_jitable
 
+from models.jit import jit, jitable
 from models.parameters import P_LENGTH, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z, PARAMETER_VECTOR_NAMES
 
 STATE_NAMES = ("x", "y", "vx", "vy")
 """Every model's state: horizontal position (m) and velocity (m/s) in the rotating (South, East, Up) frame."""
 
 
-@register_jitable
+@jitable
 def sphere_height(m, x, y, vx, vy, p):
     """Height z = −√(L² − x² − y²) (m) of a bob hanging below the pivot and its rate ż = −(xẋ + yẏ)/z (m/s)."""
     length = p[P_LENGTH]
@@ -49,19 +48,19 @@ def sphere_height(m, x, y, vx, vy, p):
     return z, -(x * vx + y * vy) / z
 
 
-@register_jitable
+@jitable
 def plane_lift(m, x, y, vx, vy, p):
     """Planar models live in the horizontal plane: z = ż = 0."""
     return 0.0, 0.0
 
 
-@register_jitable
+@jitable
 def plane_project(x, y, z, vx, vy, vz, fx, fy, fz, p):
     """Planar models: the horizontal components of the force are the acceleration."""
     return fx, fy
 
 
-@register_jitable
+@jitable
 def sphere_project(x, y, z, vx, vy, vz, fx, fy, fz, p):
     """Bob on a sphere: r̈ = F + μr with μ = −(|ṙ|² + r·F)/L² keeping |r| = L (PHYSICS.md "Models" 4)."""
     length = p[P_LENGTH]
@@ -138,14 +137,14 @@ class Model:
     # --- numba ----------------------------------------------------------------------------------------------
     @functools.cached_property
     def numba_free_force(self) -> Callable:
-        return njit(cache=True)(self.free_force)
+        return jit(self.free_force)
 
     @functools.cached_property
     def numba_acceleration(self) -> Callable:
         """njit ``(x, y, vx, vy, p) -> (ax, ay)``."""
-        source = njit(cache=True)(compose_acceleration(self.numba_free_force, *self._geometry()))
+        source = jit(compose_acceleration(self.numba_free_force, *self._geometry()))
 
-        @njit(cache=True)
+        @jit
         def acceleration(x, y, vx, vy, p):
             return source(math, x, y, vx, vy, p)
 
@@ -154,9 +153,9 @@ class Model:
     @functools.cached_property
     def numba_energy(self) -> Callable:
         """njit ``(x, y, vx, vy, p) -> float``."""
-        source = njit(cache=True)(self.energy)
+        source = jit(self.energy)
 
-        @njit(cache=True)
+        @jit
         def energy(x, y, vx, vy, p):
             return source(math, x, y, vx, vy, p)
 
@@ -169,7 +168,7 @@ class Model:
         force = self.numba_free_force
         full_rotation = self.constrained_to_sphere
 
-        @njit(cache=True)
+        @jit
         def kick(x, y, z, p):
             wx = p[P_OMEGA_X] if full_rotation else 0.0
             wy = p[P_OMEGA_Y] if full_rotation else 0.0
@@ -189,7 +188,7 @@ class Model:
         force = self.numba_free_force
         full_rotation = self.constrained_to_sphere
 
-        @njit(cache=True)
+        @jit
         def remainder(x, y, z, vx, vy, vz, p):
             wx = p[P_OMEGA_X] if full_rotation else 0.0
             wy = p[P_OMEGA_Y] if full_rotation else 0.0
@@ -209,7 +208,7 @@ class Model:
         """njit ``(t, y, out, p) -> None``: the first-order system dy/dt written into ``out`` (CVODE style)."""
         acceleration = self.numba_acceleration
 
-        @njit(cache=True)
+        @jit
         def rhs_into(t, y, out, p):
             ax, ay = acceleration(y[0], y[1], y[2], y[3], p)
             out[0] = y[2]
@@ -224,7 +223,7 @@ class Model:
         """njit ``(t, y, p) -> ndarray``: the first-order system dy/dt as a new array (scipy style)."""
         rhs_into = self.numba_rhs_into
 
-        @njit(cache=True)
+        @jit
         def rhs(t, y, p):
             out = np.empty(4)
             rhs_into(t, y, out, p)
@@ -250,3 +249,35 @@ class Model:
         x, y, vx, vy = heyoka.make_vars(*STATE_NAMES)
         pars = [heyoka.par[i] for i in range(len(PARAMETER_VECTOR_NAMES))]
         return self.energy(heyoka_math(), x, y, vx, vy, pars)
+
+    @functools.cached_property
+    def heyoka_parameter_count(self) -> int:
+        """How many leading entries of the parameter vector ``heyoka_system`` reads: heyoka integrators and
+        compiled functions want exactly (highest ``par`` index used + 1) values, e.g. 6 for the linear model,
+        which never reads the centrifugal switch p[6]."""
+        import heyoka
+
+        used = heyoka.get_params([rhs for _, rhs in self.heyoka_system()])
+        return 1 + max((i for i in range(len(PARAMETER_VECTOR_NAMES)) if heyoka.par[i] in used), default=-1)
+
+    @functools.cached_property
+    def jacobian_into(self) -> Callable:
+        """``(t, y, out, p) -> None``: the Jacobian ∂(dy/dt)/∂y of the first-order system written into the
+        C-contiguous (4, 4) array ``out`` (row i = component of dy/dt, column j = state variable).
+
+        Derived from the model's one source: heyoka differentiates the expressions of ``heyoka_system``
+        symbolically (``heyoka.diff``) and compiles the 16 derivatives with ``heyoka.cfunc`` (JIT, kept in
+        heyoka's on-disk cache). ``t`` is unused (every model is autonomous); ``p`` is the full parameter vector.
+        """
+        import heyoka
+
+        system = self.heyoka_system()
+        variables = [variable for variable, _ in system]
+        derivatives = [heyoka.diff(rhs, variable) for _, rhs in system for variable in variables]
+        compiled = heyoka.cfunc(derivatives, vars=variables)
+        n_pars = self.heyoka_parameter_count
+
+        def jacobian_into(t, y, out, p):
+            compiled(y, pars=p[:n_pars], outputs=np.reshape(out, -1, copy=False))  # raises rather than copy
+
+        return jacobian_into

@@ -1,0 +1,120 @@
+"""Model adequacy: what a scene would get wrong with another model of the hierarchy, measured, not argued.
+
+The models form a hierarchy (PHYSICS.md "Models"): linear planar (seed eqs. 6-7) < the seed's nonlinear planar
+(eqs. 4-5) < the spherical pendulum with the full rotation vector. For a scene, every pair of models in which
+the scene's model takes part is integrated with the reference integrator on the scene's grid (each run is a
+cached ``bench.reference`` of the scene with the model replaced) and compared:
+
+* ``precession_rate_diff``: (rate of the simpler model − rate of the richer) / (Ω_E|sin φ|), signed, from the
+  turning points as in ``bench.verdicts``;
+* ``trajectory_gap``: max over the grid of |r_simpler − r_richer| / A.
+
+Rows where the scene's model is the richer one say what each simpler model gets wrong (the simpler model is
+not enough if these exceed what the scene measures); for scenes on a planar model, rows where the scene's
+model is the simpler one say what it leaves out compared with the richer models (``scene_model`` tells which
+side of the pair the scene is on). Leading-order expectations are given where the physics provides them:
+planar vs spherical differ in rate by the Airy term −sign(sin φ)(3/8)θ₀² (PHYSICS.md "Airy precession";
+Olsson, Am. J. Phys. 49, 531, 1981) and in swing frequency by the finite-amplitude term k θ₀²/16 (Landau &
+Lifshitz, Mechanics, §28, eq. 28.13), which moves the trajectories apart by ≈ 2|sin(½ k θ₀² t / 16)| · A.
+
+``python -m bench.adequacy`` prints the table of the built-in scenes (references from the cache or computed).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+from bench.reference import Reference, reference_for
+from bench.scenes import Scene
+from bench.verdicts import max_position_gap, rate_scale
+
+MODEL_HIERARCHY: tuple[str, ...] = ("linear", "seed_planar", "spherical")
+"""Models from simplest to richest (PHYSICS.md "Models" 1, 3, 4)."""
+
+PLANAR_MODELS = ("linear", "seed_planar")
+
+
+def model_adequacy(scene: Scene) -> list[dict[str, Any]]:
+    """One row per pair (richer model, simpler model) of ``MODEL_HIERARCHY`` that contains the scene's model.
+
+    Columns: ``scene``, ``model`` (the richer model of the pair: the scene's own model whenever it is the richer
+    one), ``simpler_model``, ``scene_model``, ``precession_rate_diff``, ``trajectory_gap``,
+    ``expected_rate_diff`` and ``expected_trajectory_gap`` (leading-order theory, NaN where none applies), and
+    ``note``. A scene whose model is outside the hierarchy gets no rows.
+    """
+    if scene.model not in MODEL_HIERARCHY:
+        return []
+    position = MODEL_HIERARCHY.index(scene.model)
+    pairs = [(scene.model, simpler) for simpler in MODEL_HIERARCHY[:position]]
+    pairs += [(richer, scene.model) for richer in MODEL_HIERARCHY[position + 1:]]
+    references = {name: _reference_with_model(scene, name) for name in MODEL_HIERARCHY}
+    return [_row(scene, richer, simpler, references[richer], references[simpler]) for richer, simpler in pairs]
+
+
+def _reference_with_model(scene: Scene, model: str) -> Reference:
+    variant = scene if model == scene.model else dataclasses.replace(scene, model=model, name=f"{scene.name}.{model}")
+    return reference_for(variant)
+
+
+def expected_rate_diff(scene: Scene, richer: str, simpler: str) -> float:
+    """Leading-order (simpler − richer) rate difference / (Ω_E|sin φ|): the Airy term for planar vs spherical."""
+    if richer == "spherical" and simpler in PLANAR_MODELS:
+        theta0 = scene.params.amplitude_m / scene.params.length_m
+        return -math.copysign(1.0, scene.params.latitude_deg) * 0.375 * theta0**2 if scene.params.latitude_deg else 0.0
+    return math.nan
+
+
+def expected_trajectory_gap(scene: Scene, richer: str, simpler: str) -> float:
+    """Leading-order gap / A between a planar model and the spherical one at the end of the scene: the phase
+    the finite-amplitude frequency shift k θ₀²/16 accumulates, 2|sin(½ Δφ)| (its max over time while Δφ < π)."""
+    if richer == "spherical" and simpler in PLANAR_MODELS:
+        params = scene.params
+        theta0 = params.amplitude_m / params.length_m
+        phase = params.pendulum_frequency_rad_s * theta0**2 / 16.0 * scene.duration_s
+        return 2.0 * abs(math.sin(0.5 * phase)) if phase < math.pi else 2.0
+    return math.nan
+
+
+def _row(scene: Scene, richer: str, simpler: str, richer_reference: Reference,
+         simpler_reference: Reference) -> dict[str, Any]:
+    rate_diff = (simpler_reference.precession_rate_rad_s - richer_reference.precession_rate_rad_s) / rate_scale(
+        scene.params)
+    gap = max_position_gap(simpler_reference.y, richer_reference.y, scene.params.amplitude_m)
+    expected_rate = expected_rate_diff(scene, richer, simpler)
+    expected_gap = expected_trajectory_gap(scene, richer, simpler)
+    side = "the scene's model" if richer == scene.model else "what the scene's model leaves out"
+    note = (f"{simpler} vs {richer} ({side}): precession rate differs by {rate_diff:+.2e} Ω_E|sin φ|, trajectories "
+            f"by up to {gap:.2e} A over {scene.duration_s:g} s")
+    if math.isfinite(expected_rate):
+        theta0 = scene.params.amplitude_m / scene.params.length_m
+        note += (f"; leading order: Airy {expected_rate:+.2e} (θ₀ = {theta0:.3g}), "
+                 f"finite-amplitude period {expected_gap:.2e} A")
+    elif "seed_planar" in (richer, simpler):
+        note += "; the seed's eqs. 4-5 add the vertical-Coriolis tension terms and conserve no energy"
+    return {
+        "scene": scene.name,
+        "model": richer,
+        "simpler_model": simpler,
+        "scene_model": scene.model,
+        "precession_rate_diff": float(rate_diff),
+        "trajectory_gap": float(gap),
+        "expected_rate_diff": float(expected_rate),
+        "expected_trajectory_gap": float(expected_gap),
+        "note": note,
+    }
+
+
+def adequacy_table(scenes: list[Scene]) -> list[dict[str, Any]]:
+    """``model_adequacy`` rows of several scenes, in order."""
+    return [row for scene in scenes for row in model_adequacy(scene)]
+
+
+if __name__ == "__main__":  # python -m bench.adequacy: the table of the built-in scenes
+    from bench.scenes import SCENES
+
+    for entry in adequacy_table(list(SCENES.values())):
+        print(f"{entry['scene']:16s} {entry['simpler_model']:>11s} vs {entry['model']:9s} "
+              f"rate {entry['precession_rate_diff']:+.3e} (exp {entry['expected_rate_diff']:+.3e})  "
+              f"gap {entry['trajectory_gap']:.3e} (exp {entry['expected_trajectory_gap']:.3e})")

@@ -1,0 +1,69 @@
+"""``foucault-bench results``: list stored matrix runs, export rows, compare two matrix runs (bench.store)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from bench.errors import InputError
+from bench.store import DEFAULT_DB
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--db", default=str(DEFAULT_DB), help="results database (default: %(default)s)")
+    chosen = parser.add_mutually_exclusive_group()
+    chosen.add_argument("--matrix-id", metavar="ID",
+                        help="the matrix run to show or export: an id or a unique prefix (default: the latest)")
+    chosen.add_argument("--all", action="store_true", help="export the rows of every matrix run")
+    parser.add_argument("--csv", metavar="FILE", help="write the selected run rows to a CSV file")
+    parser.add_argument("--parquet", metavar="FILE", help="write the selected run rows to a Parquet file")
+    parser.add_argument("--compare", nargs=2, metavar=("A", "B"),
+                        help="compare two matrix runs: accuracy columns must match bit for bit (exit status 1 "
+                             "if not); costs are shown as ratios B/A")
+
+
+def main(args: argparse.Namespace) -> int:
+    import pandas as pd
+
+    from bench.store import ResultsStore, summary_text
+
+    if args.compare and (args.csv or args.parquet or args.all or args.matrix_id):
+        raise InputError("--compare takes two matrix ids and no other selection or export option")
+    with ResultsStore(args.db, create=False) as store:
+        if args.compare:
+            return _compare(store, *args.compare)
+        rows = store.frame(args.matrix_id, all_runs=args.all)
+        if args.csv:
+            rows.to_csv(args.csv, index=False)
+            print(f"wrote {len(rows)} rows to {args.csv}", file=sys.stderr)
+        if args.parquet:
+            rows.to_parquet(args.parquet, index=False)
+            print(f"wrote {len(rows)} rows to {args.parquet}", file=sys.stderr)
+        if args.csv or args.parquet:
+            return 0
+        runs = store.matrix_runs()[["matrix_id", "matrix_name", "status", "started_utc", "finished_utc",
+                                    "runs_planned", "rows_stored", "ok", "diverged", "failed", "host", "git_commit"]]
+        with pd.option_context("display.width", 200, "display.max_columns", None):
+            print(runs.to_string(index=False, na_rep="–"))
+        matrix_id = store.resolve_matrix_id(args.matrix_id)
+        print(f"\nmatrix run {matrix_id}:")
+        print(summary_text(store.frame(matrix_id)))
+    return 0
+
+
+def _compare(store, first: str, second: str) -> int:
+    from bench.store import compare_runs
+
+    id_a, id_b = store.resolve_matrix_id(first), store.resolve_matrix_id(second)
+    mismatches, costs, unmatched = compare_runs(store.frame(id_a), store.frame(id_b))
+    print(f"A = {id_a}, B = {id_b}: {len(costs)} runs in both, {len(unmatched)} in only one")
+    ratio_columns = [column for column in costs.columns if column.endswith("_ratio_b_over_a")]
+    by_integrator = costs.groupby("integrator")[ratio_columns].median()
+    print("\nmedian cost ratio B/A per integrator:")
+    print(by_integrator.to_string(float_format=lambda value: f"{value:.3g}", na_rep="–"))
+    if mismatches.empty:
+        print("\naccuracy columns: identical bit for bit in every shared run")
+    else:
+        print(f"\naccuracy columns: {len(mismatches)} MISMATCH(ES)")
+        print(mismatches.to_string(index=False))
+    return 0 if mismatches.empty and not unmatched else 1

@@ -1,0 +1,56 @@
+"""``foucault-bench run``: run a benchmark matrix and store one row per run (bench.runner, bench.store).
+
+The matrix is validated completely before anything runs; every problem is reported (exit status 2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+from bench.errors import InputError
+from bench.store import DEFAULT_DB
+
+
+def default_jobs() -> int:
+    """The cores this process may use (its CPU affinity where the platform has one)."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--matrix", default="default",
+                        help="a built-in matrix name (default, quick) or a path to a matrix TOML file "
+                             "(default: %(default)s)")
+    parser.add_argument("--db", default=str(DEFAULT_DB), help="results database (SQLite; default: %(default)s)")
+    parser.add_argument("--jobs", type=int, default=None,
+                        help="worker processes, one single-threaded worker per core (default: the cores available)")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue the latest run of the same matrix, skipping the runs already stored")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="run on a Dask distributed cluster (e.g. tcp://127.0.0.1:8786) instead of local workers")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bars")
+
+
+def main(args: argparse.Namespace) -> int:
+    jobs = default_jobs() if args.jobs is None else args.jobs
+    if jobs < 1:
+        raise InputError(f"--jobs must be at least 1, got {jobs}")
+
+    from bench.matrix import load_matrix
+    from bench.runner import make_executor, run_matrix
+    from bench.store import ResultsStore, summary_text
+
+    matrix = load_matrix(args.matrix)
+    where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{jobs} worker process(es)"
+    print(f"matrix {matrix.name!r} ({matrix.source}): {len(matrix.runs)} runs on {len(matrix.scenes)} scene(s), "
+          f"{where}, results in {args.db}", file=sys.stderr)
+    started = time.perf_counter()
+    executor = make_executor(jobs, args.scheduler)  # before the database: a bad address changes nothing
+    with ResultsStore(args.db) as store:
+        matrix_id = run_matrix(matrix, store, executor=executor, resume=args.resume, progress=not args.no_progress)
+        print(summary_text(store.frame(matrix_id)))
+    print(f"matrix run {matrix_id} finished in {time.perf_counter() - started:.1f} s "
+          f"(`foucault-bench results --db {args.db}` lists stored runs)", file=sys.stderr)
+    return 0

@@ -1,0 +1,399 @@
+"""Benchmark matrices: which scenes, which integrators, which step sizes and tolerances (a TOML file).
+
+A matrix file (read with ``tomllib``) looks like this (README "Benchmark matrices" has the full reference)::
+
+    name = "example"
+    description = "what this matrix is for"
+    scenes = ["pantheon"]                 # built-in scenes (bench.scenes.SCENES)
+    integrators = ["rk4", "verlet", "cvode_bdf"]
+    kh = [0.5, 0.25, 0.125]               # fixed-step sweep: step h in units of 1/k = √(L/g)
+    tol = [1e-6, 1e-9]                    # adaptive sweep: tolerance handed to the integrator as ``tol``
+    plugins = ["my_package.my_integrator"]  # modules imported first (they register integrators)
+
+    [scene.lab]                           # an inline scene, read by bench.scenes.scene_from_mapping
+    model = "linear"
+    ...
+
+    [override.explicit_euler]             # this integrator's own sweep instead of the shared one
+    kh = [0.01, 0.005]
+
+    [timing]                              # the timing protocol (bench.timing.TimingPolicy)
+    min_repeats = 3
+
+Step sizes are given as kh = k·h (k = √(g/L)), the quantity the stability limits and error constants are
+written in (PHYSICS.md "Integrators"): the step in seconds is h = kh / k, and the fixed-step loop shortens it
+(never lengthens it) to fit a whole number of steps in each output interval (``integrators.fixed_step``).
+
+``load_matrix`` refuses a bad file before anything runs and reports every problem at once
+(``bench.errors.InputError``), with a suggestion for misspelt names.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import functools
+import hashlib
+import importlib
+import importlib.util
+import json
+import math
+import subprocess
+import tomllib
+from dataclasses import dataclass
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from typing import Any
+
+from bench.errors import InputError
+from bench.reference import REFERENCE_INTEGRATOR, physics_identity
+from bench.scenes import SCENES, Scene, scene_from_mapping
+from bench.store import setting_label
+from bench.timing import TimingPolicy
+
+TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "integrators", "kh", "tol", "override", "plugins",
+                  "timing")
+SETTING_KEYS = ("kh", "tol")
+TIMING_KEYS = tuple(field.name for field in dataclasses.fields(TimingPolicy))
+BUILT_IN_DIRECTORY = Path(__file__).resolve().parent / "matrices"
+PACKAGE_ROOT = Path(__file__).resolve().parents[1]
+NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "bench/scenes.py", "bench/reference.py", "bench/verdicts.py",
+                  "bench/runner.py", "bench/timing.py")
+"""Source files (relative to the package root) whose contents are part of every run key."""
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run of a matrix: a scene, an integrator and its setting (kh for fixed-step, tol for adaptive)."""
+
+    scene: Scene
+    integrator: str
+    kh: float | None
+    tol: float | None
+    plugins: tuple[str, ...]
+    timing: TimingPolicy
+    code_version: str
+
+    @property
+    def step_s(self) -> float | None:
+        """Requested step h = kh / k in s (the loop may shorten it to fit the output grid)."""
+        return None if self.kh is None else self.kh / self.scene.params.pendulum_frequency_rad_s
+
+    @property
+    def setting(self) -> str:
+        return setting_label(self.kh, self.tol)
+
+    @functools.cached_property
+    def run_key(self) -> str:
+        """SHA-256 (16 hex digits) of the scene's name and physics, the integrator, its setting and the code
+        version."""
+        return _digest([self.scene.name, physics_identity(self.scene), self.integrator, self.kh, self.tol,
+                        self.code_version])
+
+
+@dataclass(frozen=True)
+class Matrix:
+    """A validated matrix: its runs in file order and where it came from."""
+
+    name: str
+    description: str
+    source: str
+    scenes: tuple[Scene, ...]
+    runs: tuple[RunSpec, ...]
+    plugins: tuple[str, ...]
+    timing: TimingPolicy
+
+    @functools.cached_property
+    def matrix_hash(self) -> str:
+        """Hash of the name, every run key and the timing policy: equal hashes mean the same work."""
+        return _digest([self.name, sorted(run.run_key for run in self.runs), dataclasses.asdict(self.timing)])
+
+
+def _digest(value: Any) -> str:
+    return hashlib.sha256(json.dumps(value, sort_keys=True, default=repr).encode()).hexdigest()[:16]
+
+
+def built_in_matrices() -> list[str]:
+    """Names of the matrices shipped with the package (``bench/matrices/NAME.toml``, package data)."""
+    return sorted(path.stem for path in BUILT_IN_DIRECTORY.glob("*.toml"))
+
+
+def load_matrix(name_or_path: str | Path) -> Matrix:
+    """Read and validate a matrix: a built-in name (``default``, ``quick``) or a path to a TOML file.
+
+    Raises ``InputError`` listing every problem found, one message each.
+    """
+    text, source, default_name = _read_matrix_text(str(name_or_path))
+    try:
+        document = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:  # its message carries "(at line L, column C)"
+        raise InputError(f"{source}: not valid TOML: {error}") from None
+    return parse_matrix(document, source=source, default_name=default_name)
+
+
+def _read_matrix_text(name_or_path: str) -> tuple[str, str, str]:
+    path = Path(name_or_path)
+    built_ins = built_in_matrices()
+    if name_or_path in built_ins and not path.exists():
+        text = (BUILT_IN_DIRECTORY / f"{name_or_path}.toml").read_text(encoding="utf-8")
+        return text, f"built-in matrix {name_or_path!r}", name_or_path
+    if path.is_file():
+        try:
+            return path.read_text(encoding="utf-8"), str(path), path.stem
+        except (OSError, UnicodeDecodeError) as error:
+            raise InputError(f"{path}: cannot read the matrix file: {error}") from None
+    raise InputError(
+        f"matrix {name_or_path!r} is neither a readable file nor a built-in matrix"
+        f"{_suggestion(name_or_path, built_ins)}; built-in matrices: {', '.join(built_ins)}"
+    )
+
+
+def parse_matrix(document: dict[str, Any], *, source: str = "matrix", default_name: str = "matrix") -> Matrix:
+    """Validate a parsed matrix document (see the module docstring); raise ``InputError`` with every problem."""
+    problems: list[str] = []
+
+    def problem(message: str) -> None:
+        problems.append(f"{source}: {message}")
+
+    for key in document:
+        if key not in TOP_LEVEL_KEYS:
+            problem(f"unknown key {key!r}{_suggestion(key, TOP_LEVEL_KEYS)}; allowed keys: {', '.join(TOP_LEVEL_KEYS)}")
+
+    name = document.get("name", default_name)
+    if not isinstance(name, str) or not name:
+        problem(f"name must be a non-empty string, got {name!r}")
+    description = document.get("description", "")
+    if not isinstance(description, str):
+        problem(f"description must be a string, got {description!r}")
+
+    plugins = _string_list(document, "plugins", problem, required=False)
+    for module_name in plugins:
+        try:
+            importlib.import_module(module_name)
+        except Exception as error:  # any import failure of user code is a problem to report, not a crash
+            problem(f"plugins: cannot import {module_name!r}: {type(error).__name__}: {error}")
+
+    scenes = _scenes(document, problem)
+    timing = _timing(document.get("timing", {}), problem)
+    runs = _runs(document, scenes, plugins, timing, problem)
+    if problems:
+        raise InputError(problems)
+    return Matrix(
+        name=name,
+        description=description,
+        source=source,
+        scenes=tuple(scenes),
+        runs=tuple(runs),
+        plugins=tuple(plugins),
+        timing=timing,
+    )
+
+
+def _suggestion(word: str, choices: Any) -> str:
+    close = difflib.get_close_matches(str(word), [str(choice) for choice in choices], n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _string_list(document: dict[str, Any], key: str, problem, *, required: bool) -> list[str]:
+    if key not in document:
+        if required:
+            problem(f"{key}: missing (a list of names)")
+        return []
+    value = document[key]
+    if not isinstance(value, list) or not all(isinstance(item, str) for item in value):
+        problem(f"{key} must be a list of strings, got {value!r}")
+        return []
+    duplicates = sorted({item for item in value if value.count(item) > 1})
+    if duplicates:
+        problem(f"{key}: listed more than once: {', '.join(duplicates)}")
+    return list(dict.fromkeys(value))
+
+
+def _scenes(document: dict[str, Any], problem) -> list[Scene]:
+    scenes: list[Scene] = []
+    for name in _string_list(document, "scenes", problem, required=False):
+        if name in SCENES:
+            scenes.append(SCENES[name])
+        else:
+            problem(f"scenes: unknown scene {name!r}{_suggestion(name, SCENES)}; built-in scenes: {', '.join(SCENES)}")
+    inline = document.get("scene", {})
+    if not isinstance(inline, dict):
+        problem(f"scene must be a table of inline scenes ([scene.NAME]), got {inline!r}")
+        inline = {}
+    for name, mapping in inline.items():
+        if name in SCENES:
+            problem(f"scene.{name}: the name {name!r} is taken by a built-in scene; choose another name")
+            continue
+        if not isinstance(mapping, dict):
+            problem(f"scene.{name} must be a table of scene fields, got {mapping!r}")
+            continue
+        try:
+            scenes.append(scene_from_mapping(name, mapping))
+        except InputError as error:
+            for message in error.problems:
+                problem(f"scene.{name}: {message}")
+    if not document.get("scenes") and not inline:
+        problem("no scenes: list built-in ones in scenes = [...] or define [scene.NAME] tables")
+    return scenes
+
+
+def _timing(table: Any, problem) -> TimingPolicy:
+    if not isinstance(table, dict):
+        problem(f"timing must be a table, got {table!r}")
+        return TimingPolicy()
+    values: dict[str, Any] = {}
+    defaults = TimingPolicy()
+    for key, value in table.items():
+        if key not in TIMING_KEYS:
+            problem(f"timing: unknown key {key!r}{_suggestion(key, TIMING_KEYS)}; allowed keys: {', '.join(TIMING_KEYS)}")
+            continue
+        wanted = type(getattr(defaults, key))
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or (wanted is int and not isinstance(value, int)):
+            problem(f"timing: {key} must be {'an integer' if wanted is int else 'a number'}, got {value!r}")
+            continue
+        values[key] = wanted(value)
+    policy = TimingPolicy(**values)
+    for message in policy.problems():
+        problem(message)
+    return policy
+
+
+def _sweep(value: Any, key: str, where: str, problem) -> list[float]:
+    """A list of kh values (> 0, finite) or tolerances (in (0, 1)); one problem per bad entry."""
+    if not isinstance(value, list) or not value:
+        problem(f"{where}: {key} must be a non-empty list of numbers, got {value!r}")
+        return []
+    accepted: list[float] = []
+    for item in value:
+        if isinstance(item, bool) or not isinstance(item, (int, float)):
+            problem(f"{where}: {key} entries must be numbers, got {item!r}")
+        elif key == "kh" and not (math.isfinite(item) and item > 0):
+            problem(f"{where}: step size must be > 0: kh = {item!r} (kh = k·h, the step in units of 1/k)")
+        elif key == "tol" and not 0.0 < item < 1.0:
+            problem(f"{where}: tolerance must lie in (0, 1): tol = {item!r}")
+        else:
+            accepted.append(float(item))
+    duplicates = sorted({item for item in accepted if accepted.count(item) > 1})
+    if duplicates:
+        problem(f"{where}: {key} lists {', '.join(f'{item:g}' for item in duplicates)} more than once")
+    return list(dict.fromkeys(accepted))
+
+
+def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timing: TimingPolicy,
+          problem) -> list[RunSpec]:
+    from integrators import REGISTRY  # imported here: plugins must be imported first
+
+    names = _string_list(document, "integrators", problem, required=True)
+    integrators = []
+    for name in names:
+        if name == REFERENCE_INTEGRATOR:
+            problem(f"integrators: {name} computes the references (bench.reference) and is not swept")
+        elif name not in REGISTRY:
+            problem(f"integrators: unknown integrator {name!r}{_suggestion(name, REGISTRY)}; "
+                    f"known integrators: {', '.join(sorted(set(REGISTRY) - {REFERENCE_INTEGRATOR}))}")
+        else:
+            integrators.append(REGISTRY[name])
+    shared = {key: _sweep(document[key], key, key, problem) for key in SETTING_KEYS if key in document}
+
+    overrides = document.get("override", {})
+    if not isinstance(overrides, dict):
+        problem(f"override must be a table of per-integrator tables ([override.NAME]), got {overrides!r}")
+        overrides = {}
+    own: dict[str, dict[str, list[float]]] = {}
+    for name, table in overrides.items():
+        where = f"override.{name}"
+        if name not in names:
+            problem(f"{where}: {name!r} is not listed in integrators{_suggestion(name, names)}")
+            continue
+        if not isinstance(table, dict):
+            problem(f"{where} must be a table with kh or tol, got {table!r}")
+            continue
+        for key, value in table.items():
+            if key not in SETTING_KEYS:
+                problem(f"{where}: unknown key {key!r}{_suggestion(key, SETTING_KEYS)}; allowed keys: kh, tol")
+            else:
+                own.setdefault(name, {})[key] = _sweep(value, key, where, problem)
+
+    for where, sweeps in [("kh", shared), *((f"override.{name}", table) for name, table in own.items())]:
+        _check_steps_fit(sweeps.get("kh", []), where, scenes, problem)
+
+    used = set()
+    runs: list[RunSpec] = []
+    code = code_version(tuple(plugins))
+    for integrator in integrators:
+        right, wrong = ("tol", "kh") if integrator.adaptive else ("kh", "tol")
+        kind = "adaptive (give tol)" if integrator.adaptive else "a fixed-step method (give kh)"
+        if wrong in own.get(integrator.name, {}):
+            problem(f"override.{integrator.name}: {integrator.name} is {kind}; {wrong} does not apply to it")
+        sweep = own.get(integrator.name, {}).get(right)
+        if sweep is None:
+            sweep = shared.get(right)
+            used.add(right)
+        if sweep is None:
+            problem(f"integrators: {integrator.name} is {kind} but no {right} sweep is given "
+                    f"(add {right} = [...] or [override.{integrator.name}])")
+            continue
+        for scene in scenes:
+            for value in sweep:
+                runs.append(RunSpec(
+                    scene=scene,
+                    integrator=integrator.name,
+                    kh=value if right == "kh" else None,
+                    tol=value if right == "tol" else None,
+                    plugins=tuple(plugins),
+                    timing=timing,
+                    code_version=code,
+                ))
+    for key in shared:
+        if key not in used and integrators:
+            kind = "fixed-step" if key == "kh" else "adaptive"
+            problem(f"{key} is given but no listed {kind} integrator uses it "
+                    f"({'tolerances are for adaptive integrators' if key == 'tol' else 'kh is for fixed-step integrators'})")
+    return runs
+
+
+def _check_steps_fit(kh_values: list[float], where: str, scenes: list[Scene], problem) -> None:
+    """A fixed step is at most one output interval Δ (``integrators.fixed_step``): kh ≤ k·Δ in every scene."""
+    for scene in scenes:
+        largest = scene.params.pendulum_frequency_rad_s * scene.output_interval_s
+        too_coarse = [value for value in kh_values if value > largest * (1.0 + 1e-12)]
+        if too_coarse:
+            problem(f"{where}: kh = {', '.join(f'{value:g}' for value in too_coarse)} exceeds what scene "
+                    f"{scene.name!r} allows: a step is at most one output interval, kh <= k·Δ = {largest:.4g}")
+
+
+@functools.lru_cache(maxsize=1)
+def git_commit() -> str | None:
+    """HEAD commit of the source tree the package is imported from, with ``+dirty`` for uncommitted
+    changes to tracked files; ``None`` outside a git checkout (provenance only, not part of run keys)."""
+    try:
+        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=PACKAGE_ROOT, capture_output=True, text=True,
+                                timeout=10)
+        if commit.returncode != 0:
+            return None
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=PACKAGE_ROOT,
+                               capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return commit.stdout.strip() + ("+dirty" if dirty.stdout.strip() else "")
+
+
+@functools.lru_cache(maxsize=None)
+def code_version(plugins: tuple[str, ...] = ()) -> str:
+    """SHA-256 (16 hex digits) of the package version and of every source file that determines a row's
+    numbers (``NUMBER_SOURCES``, plus the plug-in modules' files): a stored row is reused by ``--resume`` only
+    when none of them changed, committed or not."""
+    try:
+        package = version("foucault-bench")
+    except PackageNotFoundError:
+        package = "unknown"
+    digest = hashlib.sha256(package.encode())
+    paths = sorted({path for pattern in NUMBER_SOURCES for path in PACKAGE_ROOT.glob(pattern)})
+    for module_name in plugins:
+        spec = importlib.util.find_spec(module_name)
+        if spec is not None and spec.origin and spec.origin not in ("built-in", "frozen"):
+            paths.append(Path(spec.origin))
+    for path in paths:
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]

@@ -1,0 +1,206 @@
+"""Section ``adapters``: our adaptive-integrator adapters against the bare libraries.
+
+Each adapter's ``solve`` (as the runner calls it: verdict streams on) is timed against the library called
+directly with the same compiled right-hand side, Jacobian, tolerances, output grid and turning-point event,
+set up once outside the timed call as a user would. Target: adapter ≤ 1.05× the bare call. Both sides must
+return the same states (checked); what remains is the adapter's own work (validation, bookkeeping, silencing
+the C libraries' output, the step guards of the scipy adapter, the copy of heyoka's compiled integrator).
+
+Also reported for CVODE: the wall time per right-hand-side evaluation of a whole solve, the cost of one
+callback from CVODE into the numba right-hand side, and the effect of the analytic Jacobian (heyoka's
+symbolic derivative, ``Model.jacobian_into``) against CVODE's internal difference quotients.
+
+Setting: the 3 m laboratory pendulum of ``bench.scenes`` (spherical model, the physical one) over
+``DURATION_S`` with its 0.45 s output grid, tol = ``TOL``. Timed by process CPU time, interleaved rounds.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from dataclasses import replace
+from typing import Any, Callable
+
+import numpy as np
+
+from bench.perf.measure import Row, interleaved, median_ratio
+from bench.scenes import SCENES
+from integrators import get_integrator
+from integrators.adaptive import absolute_tolerance, heyoka_tolerance, step_budget
+from integrators.cvode import CvodeAdams, CvodeBdf
+
+SECTION = "adapters"
+TARGET = 1.05
+TOL = 1.0e-8
+DURATION_S = 300.0
+SCENE = "lab_3m"
+
+
+def _scene_problem(quick: bool):
+    scene = SCENES[SCENE]
+    duration = scene.output_interval_s * round((60.0 if quick else DURATION_S) / scene.output_interval_s)
+    return replace(scene, duration_s=duration).problem()
+
+
+def _radial_cvode(t, y, g):
+    g[0] = y[0] * y[2] + y[1] * y[3]
+
+
+_radial_cvode.terminal = [False]
+_radial_cvode.direction = [-1]
+
+
+def bare_cvode(problem, method: str, analytic_jacobian: bool = True) -> Callable[[], Any]:
+    """scikit-sundae's CVODE with the adapter's right-hand side, Jacobian, tolerances, grid and event."""
+    from sksundae.cvode import CVODE
+
+    p = problem.parameter_vector
+    rhs_into = problem.model.numba_rhs_into
+    jacobian_into = problem.model.jacobian_into
+
+    def rhs(t, y, yp):
+        rhs_into(t, y, yp, p)
+
+    def jacobian(t, y, yp, jj):
+        jacobian_into(t, y, jj, p)
+
+    tspan = np.union1d([0.0], problem.t_out)
+    options = {"method": method, "rtol": TOL, "atol": absolute_tolerance(problem.params, TOL),
+               "max_num_steps": step_budget(problem.params, float(np.max(np.diff(tspan)))),
+               "eventsfn": _radial_cvode, "num_events": 1}
+    if analytic_jacobian:
+        options["jacfn"] = jacobian
+    y0 = problem.initial_state
+    return lambda: CVODE(rhs, **options).solve(tspan, y0)
+
+
+def bare_heyoka(problem) -> Callable[[], Any]:
+    """heyoka's taylor_adaptive compiled once; each call resets time, state and event log and propagates the grid."""
+    import heyoka
+
+    model = problem.model
+    system = model.heyoka_system()
+    x, y, vx, vy = (variable for variable, _ in system)
+    rows: list = []
+
+    def record(integrator, t, d_sign):
+        integrator.update_d_output(t)
+        rows.append((float(t), float(integrator.d_output[0]), float(integrator.d_output[1])))
+
+    event = heyoka.nt_event(x * vx + y * vy, record, direction=heyoka.event_direction.negative)
+    pars = problem.parameter_vector[: model.heyoka_parameter_count]
+    integrator = heyoka.taylor_adaptive(system, problem.initial_state, tol=heyoka_tolerance(problem.params, TOL),
+                                        pars=pars, nt_events=[event])
+    grid = problem.t_out
+
+    def call():
+        rows.clear()
+        integrator.time = 0.0
+        integrator.state[:] = problem.initial_state
+        return integrator.propagate_grid(grid)
+
+    return call
+
+
+def _radial_scipy(t, y, p):
+    return y[0] * y[2] + y[1] * y[3]
+
+
+_radial_scipy.terminal = False
+_radial_scipy.direction = -1.0
+
+
+def bare_solve_ivp(problem, method: str) -> Callable[[], Any]:
+    """``scipy.integrate.solve_ivp`` with the adapter's right-hand side, Jacobian (LSODA), tolerances, grid, event."""
+    from scipy.integrate import solve_ivp
+
+    model = problem.model
+    options = {}
+    if method == "LSODA":
+        jacobian_into = model.jacobian_into
+
+        def jacobian(t, y, p):
+            out = np.empty((4, 4))
+            jacobian_into(t, y, out, p)
+            return out
+
+        options["jac"] = jacobian
+    atol = absolute_tolerance(problem.params, TOL)
+    p = problem.parameter_vector
+    return lambda: solve_ivp(model.numba_rhs, (0.0, problem.t_end_s), problem.initial_state, method=method,
+                             t_eval=problem.t_out, events=_radial_scipy, args=(p,), rtol=TOL, atol=atol, **options)
+
+
+def _final_state(result: Any) -> np.ndarray:
+    """The last output state of a bare library call (CVODE result, heyoka grid outcome, or OdeResult)."""
+    if isinstance(result, tuple):  # heyoka propagate_grid: (outcome, min_h, max_h, steps, callback, states)
+        return np.asarray(result[-1])[-1]
+    y = np.asarray(result.y)
+    return y[-1] if y.shape[-1] == 4 else y[:, -1]
+
+
+BARE: dict[str, Callable] = {
+    "cvode_adams": lambda problem: bare_cvode(problem, "Adams"),
+    "cvode_bdf": lambda problem: bare_cvode(problem, "BDF"),
+    "heyoka_taylor": bare_heyoka,
+    "scipy_dop853": lambda problem: bare_solve_ivp(problem, "DOP853"),
+    "scipy_rk45": lambda problem: bare_solve_ivp(problem, "RK45"),
+    "scipy_lsoda": lambda problem: bare_solve_ivp(problem, "LSODA"),
+}
+
+
+def rhs_callback_us(problem, calls: int) -> float:
+    """CPU µs of one call of the CVODE-style right-hand side from Python (the numba dispatch of a callback)."""
+    p = problem.parameter_vector
+    rhs_into = problem.model.numba_rhs_into
+    y, yp = problem.initial_state.copy(), np.empty(4)
+    rhs_into(0.0, y, yp, p)
+    start = time.process_time()
+    for _ in range(calls):
+        rhs_into(0.0, y, yp, p)
+    return (time.process_time() - start) / calls * 1e6
+
+
+def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
+    """Time every adapter against its bare library; the target rows, a detail table and its headers."""
+    problem = _scene_problem(quick)
+    rounds = 3 if quick else 7
+    headers = ["integrator", "adapter s", "bare s", "adapter / bare", "nfev", "µs per RHS evaluation"]
+    rows, table = [], []
+    for name, make_bare in BARE.items():
+        integrator = get_integrator(name)
+        adapter = lambda: integrator.solve(problem, tol=TOL)  # noqa: E731  (the call timed)
+        bare = make_bare(problem)
+        solution, reference = adapter(), bare()
+        difference = np.max(np.abs(solution.y[-1] - _final_state(reference)))
+        assert solution.status == "ok" and difference <= 1e-12 * np.max(np.abs(solution.y)), (name, difference)
+        times = interleaved({"adapter": adapter, "bare": bare}, rounds, clock=time.process_time)
+        ratio = median_ratio(times["adapter"], times["bare"])
+        bare_s = statistics.median(times["bare"])
+        per_rhs = bare_s / solution.nfev * 1e6 if solution.nfev else float("nan")
+        table.append([name, f"{statistics.median(times['adapter']):.4f}", f"{bare_s:.4f}", f"{ratio:.3f}",
+                      str(solution.nfev), f"{per_rhs:.2f}"])
+        rows.append(Row(SECTION, f"{name}: adapter / bare library", ratio, "×", TARGET,
+                        f"{statistics.median(times['adapter']) * 1e3:.1f} vs {bare_s * 1e3:.1f} ms"))
+        if name.startswith("cvode"):
+            rows.append(Row(SECTION, f"{name}: wall per RHS evaluation (whole solve / nfev)", per_rhs, "µs",
+                            note=f"nfev = {solution.nfev}"))
+    rows.append(Row(SECTION, "CVODE RHS callback: one Python → numba call", rhs_callback_us(problem, 20_000), "µs",
+                    note="numba_rhs_into called from Python as CVODE calls it"))
+    rows.extend(jacobian_effect(problem, rounds))
+    return rows, table, headers
+
+
+def jacobian_effect(problem, rounds: int) -> list[Row]:
+    """CVODE with the analytic Jacobian against CVODE's difference quotients: time ratio, nfev and njev."""
+    rows = []
+    for cls in (CvodeAdams, CvodeBdf):
+        analytic, quotients = cls(analytic_jacobian=True), cls(analytic_jacobian=False)
+        with_jac, without = analytic.solve(problem, tol=TOL), quotients.solve(problem, tol=TOL)
+        times = interleaved({"analytic": lambda: analytic.solve(problem, tol=TOL),
+                             "quotients": lambda: quotients.solve(problem, tol=TOL)}, rounds, clock=time.process_time)
+        rows.append(Row(SECTION, f"{cls.name}: analytic Jacobian / difference quotients (time)",
+                        median_ratio(times["analytic"], times["quotients"]), "×",
+                        note=f"nfev {with_jac.nfev} vs {without.nfev} (incl. 4 per quotient Jacobian), "
+                             f"njev {with_jac.njev} vs {without.njev}"))
+    return rows

@@ -1,0 +1,78 @@
+"""Section ``matrices``: wall time of ``foucault-bench run`` on the quick and default matrices, cold and warm.
+
+Each matrix runs twice as a user would run it (``foucault-bench run --matrix NAME --db TMP``, one worker per
+core), both times into a fresh results database and with every compilation cache (numba, heyoka, reference
+solutions) in one fresh directory: the first run starts cold, the second finds the caches filled. Targets:
+the second quick run takes ≤ 30 % of the first (compile once), and the default matrix takes ≤ 5 minutes.
+``--quick`` runs the quick matrix only.
+
+Where the time goes is read back from the stored rows: per run, warm-up + timed repeats ≈
+``compile_time_s + (1 + repeats) × wall_time_s`` (bench.timing's protocol), summed per integrator; the
+remainder of the wall time (× the workers) is start-up, references and scheduling.
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+
+from bench.perf.measure import Row, cache_environment, run_timed
+from bench.store import ResultsStore
+
+SECTION = "matrices"
+TARGET_WARM_FRACTION = 0.30
+TARGET_DEFAULT_S = 300.0
+
+
+def run_matrix(name: str, root: Path, db: Path) -> float:
+    """Run one matrix with the caches under ``root``; its wall time (s). Raises if the command fails."""
+    command = [sys.executable, "-m", "bench.cli", "run", "--matrix", name, "--db", str(db), "--no-progress"]
+    wall_s, done = run_timed(command, cache_environment(root))
+    if done.returncode != 0:
+        raise RuntimeError(f"{' '.join(command)} failed ({done.returncode}):\n{done.stderr.strip()[-2000:]}")
+    return wall_s
+
+
+def time_spent(db: Path) -> pd.DataFrame:
+    """Per stored run: scene, integrator, setting and its estimated busy time (s) in a worker."""
+    with ResultsStore(db, create=False) as store:
+        frame = store.frame()
+    repeats = frame["repeats"].fillna(0)
+    frame["busy_s"] = frame["compile_time_s"].fillna(0) + frame["wall_time_s"].fillna(0) * (1 + repeats)
+    return frame
+
+
+def dominant(frame: pd.DataFrame, label: str, wall_s: float, jobs: int) -> list[list[str]]:
+    """Detail rows: busy time per integrator, largest first, with its share of the workers' capacity."""
+    capacity = wall_s * jobs
+    per_integrator = frame.groupby("integrator")["busy_s"].agg(["sum", "count", "max"]).sort_values("sum", ascending=False)
+    table = [[label, integrator, int(row["count"]), f"{row['sum']:.1f}", f"{100 * row['sum'] / capacity:.0f} %",
+              f"{row['max']:.1f}"] for integrator, row in per_integrator.iterrows()]
+    table.append([label, "(start-up, references, idle)", "", f"{capacity - frame['busy_s'].sum():.1f}",
+                  f"{100 * (1 - frame['busy_s'].sum() / capacity):.0f} %", ""])
+    return table
+
+
+def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
+    """Cold and warm matrix runs; the rows, a table of where the time went and its headers."""
+    from bench.commands.run import default_jobs
+
+    jobs = default_jobs()
+    headers = ["run", "integrator", "runs", "busy s", "share of workers' time", "longest run s"]
+    rows, table, walls = [], [], {}
+    for name in ("quick",) if quick else ("quick", "default"):
+        with tempfile.TemporaryDirectory(prefix=f"foucault-perf-{name}-") as directory:
+            root = Path(directory)
+            for state in ("cold", "warm"):
+                db = root / f"{state}.sqlite"
+                walls[name, state] = run_matrix(name, root, db)
+                table.extend(dominant(time_spent(db), f"{name} {state}", walls[name, state], jobs))
+                target = TARGET_DEFAULT_S if name == "default" else None
+                rows.append(Row(SECTION, f"{name} matrix, {state} caches, {jobs} workers: wall time",
+                                walls[name, state], "s", target))
+    rows.append(Row(SECTION, "compile once: second quick run / first", walls["quick", "warm"] / walls["quick", "cold"],
+                    "×", TARGET_WARM_FRACTION, f"{walls['quick', 'warm']:.1f} s vs {walls['quick', 'cold']:.1f} s"))
+    return rows, table, headers

@@ -1,0 +1,389 @@
+"""The results store: one SQLite file (stdlib ``sqlite3``) holding every run row, its provenance and study tables.
+
+Tables:
+
+* ``runs``: one row per run, columns exactly ``bench.schema.COLUMNS``; primary key (matrix_id, run_key).
+  The runner writes and commits each row as soon as its run finishes, so a killed matrix keeps what finished.
+* ``matrix_runs``: one row per matrix run with its provenance (matrix name, source and hash, code version, git
+  commit, package versions, CPU model, host, UTC start and end, jobs or scheduler, status).
+* ``adequacy``: the model-adequacy rows of ``bench.adequacy.model_adequacy`` per matrix run and scene.
+* any study table another module writes with ``write_table`` (read back with ``read_table``).
+
+Also the two standard views of stored rows: ``summarize`` (one line per scene × integrator) and
+``compare_runs`` (accuracy columns bit for bit, cost as ratios).
+
+SQLite stores a NaN as NULL (SQLite docs, "Datatypes": there is no NaN REAL value); read back, both are NaN.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import re
+import socket
+import sqlite3
+import uuid
+from datetime import datetime, timezone
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pandas as pd
+
+from bench.errors import InputError
+from bench.schema import COLUMN_NAMES, COLUMNS, VERDICT_COLUMNS
+
+if TYPE_CHECKING:
+    from bench.matrix import Matrix
+
+DEFAULT_DB = Path("results") / "foucault.sqlite"
+RUNS_TABLE = "runs"
+MATRIX_RUNS_TABLE = "matrix_runs"
+ADEQUACY_TABLE = "adequacy"
+RESERVED_TABLES = (RUNS_TABLE, MATRIX_RUNS_TABLE, ADEQUACY_TABLE)
+
+PROVENANCE_PACKAGES = ("numpy", "scipy", "numba", "heyoka", "scikit-sundae", "pandas", "distributed")
+
+DETERMINISTIC_COLUMNS: tuple[str, ...] = (
+    "status", "n_out", "step_s", "kh", "tol", "precession_rate_rad_s", *VERDICT_COLUMNS,
+    "nfev", "njev", "steps", "rejected_steps",
+)
+"""Columns that must be identical bit for bit when the same matrix runs twice on the same machine."""
+
+COST_COLUMNS: tuple[str, ...] = ("wall_time_s", "compile_time_s", "peak_rss_mb")
+
+MATRIX_RUN_COLUMNS: tuple[tuple[str, str], ...] = (
+    ("matrix_id", "TEXT PRIMARY KEY"),
+    ("matrix_name", "TEXT"),
+    ("matrix_source", "TEXT"),
+    ("matrix_hash", "TEXT"),
+    ("description", "TEXT"),
+    ("runs_planned", "INTEGER"),
+    ("status", "TEXT"),  # running / finished / interrupted
+    ("started_utc", "TEXT"),
+    ("finished_utc", "TEXT"),
+    ("resumed_utc", "TEXT"),  # JSON list of the UTC times the matrix run was resumed
+    ("jobs", "INTEGER"),
+    ("scheduler", "TEXT"),
+    ("code_version", "TEXT"),
+    ("git_commit", "TEXT"),
+    ("host", "TEXT"),
+    ("cpu_model", "TEXT"),
+    ("cpu_count", "INTEGER"),
+    ("platform", "TEXT"),
+    ("python", "TEXT"),
+    ("package_versions", "TEXT"),  # JSON object: package → version
+)
+
+_TABLE_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+def utc_now() -> str:
+    return datetime.now(timezone.utc).isoformat(timespec="seconds")
+
+
+def cpu_model() -> str:
+    """The CPU's model name (``/proc/cpuinfo`` on Linux, ``platform.processor()`` elsewhere)."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as cpuinfo:
+            for line in cpuinfo:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def package_versions() -> dict[str, str]:
+    found = {}
+    for package in PROVENANCE_PACKAGES:
+        try:
+            found[package] = version(package)
+        except PackageNotFoundError:
+            found[package] = "not installed"
+    return found
+
+
+def _plain(value: Any) -> Any:
+    """A value sqlite3 can bind: numpy scalars become Python numbers, NaN stays a float (stored as NULL)."""
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+class ResultsStore:
+    """One results database. Use as a context manager or call ``close``.
+
+    Args:
+        path: the SQLite file; its directory is created when ``create`` is true.
+        create: create the file and tables if missing; when false a missing file is an ``InputError``.
+    """
+
+    def __init__(self, path: str | Path = DEFAULT_DB, *, create: bool = True):
+        self.path = Path(path)
+        if not create and not self.path.is_file():
+            raise InputError(f"no results database at {self.path} (run `foucault-bench run` first, or give --db)")
+        if create:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            self.connection = sqlite3.connect(self.path, timeout=30.0)
+            self.connection.execute("PRAGMA journal_mode=WAL")
+            self._create_tables()
+        except sqlite3.DatabaseError as error:
+            raise InputError(f"{self.path}: not a usable SQLite results database: {error}") from None
+
+    def __enter__(self) -> "ResultsStore":
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self.connection.close()
+
+    def _create_tables(self) -> None:
+        runs = ", ".join(f"{column.name} {column.sql_type}" for column in COLUMNS)
+        matrix_runs = ", ".join(f"{name} {sql_type}" for name, sql_type in MATRIX_RUN_COLUMNS)
+        with self.connection:
+            self.connection.execute(
+                f"CREATE TABLE IF NOT EXISTS {RUNS_TABLE} ({runs}, PRIMARY KEY (matrix_id, run_key))"
+            )
+            self.connection.execute(f"CREATE TABLE IF NOT EXISTS {MATRIX_RUNS_TABLE} ({matrix_runs})")
+
+    # --- matrix runs and provenance -------------------------------------------------------------------------
+
+    def start_matrix_run(self, matrix: "Matrix", *, jobs: int | None, scheduler: str | None,
+                         resume: bool) -> tuple[str, set[str]]:
+        """Open a matrix run and return its id and the run keys already stored under it.
+
+        With ``resume`` the latest matrix run with the same matrix hash (same runs, same code version) is
+        continued, so that one matrix id ends up holding every row once; otherwise a new id is made.
+        """
+        from bench.matrix import code_version, git_commit
+
+        now = utc_now()
+        if resume:
+            found = self.connection.execute(
+                f"SELECT matrix_id, resumed_utc FROM {MATRIX_RUNS_TABLE} WHERE matrix_hash = ? "
+                "ORDER BY started_utc DESC, rowid DESC LIMIT 1",
+                (matrix.matrix_hash,),
+            ).fetchone()
+            if found is not None:
+                matrix_id, resumed = found
+                with self.connection:
+                    self.connection.execute(
+                        f"UPDATE {MATRIX_RUNS_TABLE} SET status = 'running', resumed_utc = ?, jobs = ?, "
+                        "scheduler = ? WHERE matrix_id = ?",
+                        (json.dumps([*json.loads(resumed or "[]"), now]), jobs, scheduler, matrix_id),
+                    )
+                return matrix_id, self.stored_run_keys(matrix_id)
+        matrix_id = f"{datetime.now(timezone.utc):%Y%m%d-%H%M%S}-{uuid.uuid4().hex[:6]}"
+        record = {
+            "matrix_id": matrix_id,
+            "matrix_name": matrix.name,
+            "matrix_source": matrix.source,
+            "matrix_hash": matrix.matrix_hash,
+            "description": matrix.description,
+            "runs_planned": len(matrix.runs),
+            "status": "running",
+            "started_utc": now,
+            "finished_utc": None,
+            "resumed_utc": "[]",
+            "jobs": jobs,
+            "scheduler": scheduler,
+            "code_version": code_version(matrix.plugins),
+            "git_commit": git_commit(),
+            "host": socket.gethostname(),
+            "cpu_model": cpu_model(),
+            "cpu_count": os.cpu_count(),
+            "platform": platform.platform(),
+            "python": platform.python_version(),
+            "package_versions": json.dumps(package_versions(), sort_keys=True),
+        }
+        self._insert(MATRIX_RUNS_TABLE, record)
+        return matrix_id, set()
+
+    def finish_matrix_run(self, matrix_id: str, status: str = "finished") -> None:
+        with self.connection:
+            self.connection.execute(
+                f"UPDATE {MATRIX_RUNS_TABLE} SET status = ?, finished_utc = ? WHERE matrix_id = ?",
+                (status, utc_now(), matrix_id),
+            )
+
+    def matrix_runs(self) -> pd.DataFrame:
+        """Every matrix run (provenance) with its row counts by status, oldest first."""
+        return pd.read_sql_query(
+            f"SELECT m.*, COUNT(r.run_key) AS rows_stored, "
+            "SUM(r.status = 'ok') AS ok, SUM(r.status = 'diverged') AS diverged, SUM(r.status = 'failed') AS failed "
+            f"FROM {MATRIX_RUNS_TABLE} m LEFT JOIN {RUNS_TABLE} r ON r.matrix_id = m.matrix_id "
+            "GROUP BY m.matrix_id ORDER BY m.started_utc, m.rowid",
+            self.connection,
+        )
+
+    def resolve_matrix_id(self, text: str | None) -> str:
+        """A stored matrix id from an exact id, a unique prefix, or ``None``/``"latest"`` for the latest."""
+        ids = [row[0] for row in self.connection.execute(
+            f"SELECT matrix_id FROM {MATRIX_RUNS_TABLE} ORDER BY started_utc, rowid")]
+        if not ids:
+            raise InputError(f"{self.path}: no matrix runs stored yet")
+        if text in (None, "latest"):
+            return ids[-1]
+        matches = [matrix_id for matrix_id in ids if matrix_id.startswith(text)]
+        if len(matches) != 1:
+            kind = "no" if not matches else "more than one"
+            raise InputError(f"{kind} stored matrix run matches {text!r}; stored: {', '.join(ids[-10:])}")
+        return matches[0]
+
+    # --- run rows ------------------------------------------------------------------------------------------
+
+    def write_run(self, row: dict[str, Any]) -> None:
+        """Insert one run row (keys ⊆ ``COLUMN_NAMES``; missing ones are NULL) and commit at once."""
+        unknown = set(row) - set(COLUMN_NAMES)
+        if unknown:
+            raise ValueError(f"not columns of the results table: {', '.join(sorted(unknown))}")
+        self._insert(RUNS_TABLE, {name: row.get(name) for name in COLUMN_NAMES})
+
+    def stored_run_keys(self, matrix_id: str) -> set[str]:
+        cursor = self.connection.execute(f"SELECT run_key FROM {RUNS_TABLE} WHERE matrix_id = ?", (matrix_id,))
+        return {key for (key,) in cursor}
+
+    def frame(self, matrix_id: str | None = None, *, all_runs: bool = False) -> pd.DataFrame:
+        """Run rows as a DataFrame (columns ``COLUMN_NAMES``, insertion order): of ``matrix_id`` (an id, a
+        unique prefix), of the latest matrix run when ``None``, or of every matrix run with ``all_runs``."""
+        if all_runs:
+            return pd.read_sql_query(f"SELECT * FROM {RUNS_TABLE} ORDER BY rowid", self.connection)
+        return pd.read_sql_query(
+            f"SELECT * FROM {RUNS_TABLE} WHERE matrix_id = ? ORDER BY rowid",
+            self.connection,
+            params=(self.resolve_matrix_id(matrix_id),),
+        )
+
+    # --- adequacy and study tables --------------------------------------------------------------------------
+
+    def write_adequacy(self, matrix_id: str, scene: str, rows: list[dict[str, Any]]) -> None:
+        """Append model-adequacy rows of one scene, tagged with the matrix id (replacing earlier ones)."""
+        if self._table_exists(ADEQUACY_TABLE):
+            with self.connection:
+                self.connection.execute(
+                    f"DELETE FROM {ADEQUACY_TABLE} WHERE matrix_id = ? AND scene = ?", (matrix_id, scene))
+        if rows:
+            frame = pd.DataFrame([{"matrix_id": matrix_id, "scene": scene, **row} for row in rows])
+            self._append_frame(ADEQUACY_TABLE, frame)
+
+    def adequacy(self, matrix_id: str | None = None) -> pd.DataFrame:
+        if not self._table_exists(ADEQUACY_TABLE):
+            return pd.DataFrame()
+        return pd.read_sql_query(f"SELECT * FROM {ADEQUACY_TABLE} WHERE matrix_id = ?", self.connection,
+                                 params=(self.resolve_matrix_id(matrix_id),))
+
+    def write_table(self, name: str, frame: pd.DataFrame, *, replace: bool = True) -> None:
+        """Store a study table under ``name`` (replacing it, or appending with ``replace=False``)."""
+        if not _TABLE_NAME.match(name) or name in RESERVED_TABLES:
+            raise ValueError(f"bad table name {name!r}: use letters, digits and _, not one of {RESERVED_TABLES}")
+        if replace:
+            with self.connection:
+                self.connection.execute(f"DROP TABLE IF EXISTS {name}")
+        self._append_frame(name, frame)
+
+    def read_table(self, name: str) -> pd.DataFrame:
+        if not _TABLE_NAME.match(name) or not self._table_exists(name):
+            tables = [row[0] for row in self.connection.execute("SELECT name FROM sqlite_master WHERE type='table'")]
+            raise KeyError(f"no table {name!r} in {self.path}; tables: {', '.join(sorted(tables))}")
+        return pd.read_sql_query(f"SELECT * FROM {name} ORDER BY rowid", self.connection)
+
+    # --- helpers --------------------------------------------------------------------------------------------
+
+    def _insert(self, table: str, record: dict[str, Any]) -> None:
+        names = ", ".join(record)
+        marks = ", ".join("?" for _ in record)
+        with self.connection:
+            self.connection.execute(f"INSERT INTO {table} ({names}) VALUES ({marks})",
+                                    [_plain(value) for value in record.values()])
+
+    def _table_exists(self, name: str) -> bool:
+        return self.connection.execute(
+            "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?", (name,)).fetchone() is not None
+
+    def _append_frame(self, name: str, frame: pd.DataFrame) -> None:
+        """Append ``frame`` with pandas' ``to_sql``, first adding any column the stored table lacks."""
+        if self._table_exists(name):
+            stored = {row[1] for row in self.connection.execute(f"PRAGMA table_info({name})")}
+            with self.connection:
+                for column in frame.columns:
+                    if column not in stored:
+                        self.connection.execute(f'ALTER TABLE {name} ADD COLUMN "{column}"')
+        with self.connection:
+            frame.to_sql(name, self.connection, if_exists="append", index=False)
+
+
+# --- views ----------------------------------------------------------------------------------------------------
+
+
+def summarize(frame: pd.DataFrame) -> pd.DataFrame:
+    """One line per scene × integrator: run counts by status, the best (smallest) reference error among the
+    ok runs, the setting that reached it and its cost (median wall time, right-hand-side evaluations)."""
+    lines = []
+    for (scene, integrator), group in frame.groupby(["scene", "integrator"]):
+        ok = group[group["status"] == "ok"]
+        best = ok.loc[ok["reference_error"].idxmin()] if ok["reference_error"].notna().any() else None
+        lines.append({
+            "scene": scene,
+            "integrator": integrator,
+            "runs": len(group),
+            "ok": int((group["status"] == "ok").sum()),
+            "diverged": int((group["status"] == "diverged").sum()),
+            "failed": int((group["status"] == "failed").sum()),
+            "best_reference_error": None if best is None else best["reference_error"],
+            "at": None if best is None else setting_label(best["kh"], best["tol"]),
+            "wall_time_s": None if best is None else best["wall_time_s"],
+            "nfev": None if best is None else best["nfev"],
+        })
+    return pd.DataFrame(lines)
+
+
+def summary_text(frame: pd.DataFrame) -> str:
+    """``summarize`` as the table printed at the end of a matrix run and by ``foucault-bench results``."""
+    if frame.empty:
+        return "no runs stored"
+    return summarize(frame).to_string(index=False, float_format=lambda value: f"{value:.3g}", na_rep="–")
+
+
+def setting_label(kh: float | None, tol: float | None) -> str:
+    """``tol=1e-08`` for an adaptive run, ``kh=0.125`` for a fixed-step one (missing values are None or NaN)."""
+    return f"tol={tol:g}" if pd.notna(tol) else f"kh={kh:.4g}"
+
+
+def _bits_equal(left: pd.Series, right: pd.Series) -> pd.Series:
+    """Element-wise identity: floats compared by their 64-bit patterns (NaN equals NaN, −0.0 ≠ 0.0), others
+    by value with missing equal to missing."""
+    if pd.api.types.is_numeric_dtype(left) and pd.api.types.is_numeric_dtype(right):
+        left_bits = left.to_numpy(dtype=np.float64).view(np.int64)
+        right_bits = right.to_numpy(dtype=np.float64).view(np.int64)
+        both_nan = np.isnan(left.to_numpy(dtype=np.float64)) & np.isnan(right.to_numpy(dtype=np.float64))
+        return pd.Series((left_bits == right_bits) | both_nan, index=left.index)
+    return (left == right) | (left.isna() & right.isna())
+
+
+def compare_runs(frame_a: pd.DataFrame, frame_b: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame, list[str]]:
+    """Compare two matrix runs row by row (matched on run_key).
+
+    Returns (mismatches, costs, unmatched): one mismatch line per differing deterministic column of a row
+    (``DETERMINISTIC_COLUMNS``; must be empty for the same matrix on the same machine), the cost ratios B/A
+    per row, and the run keys present in only one of the two.
+    """
+    key_columns = ["run_key", "scene", "integrator"]
+    merged = frame_a.merge(frame_b, on=key_columns, suffixes=("_a", "_b"), how="inner")
+    unmatched = sorted(set(frame_a["run_key"]) ^ set(frame_b["run_key"]))
+    mismatches = []
+    for column in DETERMINISTIC_COLUMNS:
+        equal = _bits_equal(merged[f"{column}_a"], merged[f"{column}_b"])
+        for _, row in merged[~equal].iterrows():
+            mismatches.append({"scene": row["scene"], "integrator": row["integrator"], "run_key": row["run_key"],
+                               "column": column, "a": row[f"{column}_a"], "b": row[f"{column}_b"]})
+    costs = merged[key_columns].copy()
+    costs["setting"] = [setting_label(kh, tol) for kh, tol in zip(merged["kh_a"], merged["tol_a"])]
+    for column in COST_COLUMNS:
+        costs[f"{column}_ratio_b_over_a"] = merged[f"{column}_b"] / merged[f"{column}_a"]
+    return pd.DataFrame(mismatches, columns=["scene", "integrator", "run_key", "column", "a", "b"]), costs, unmatched

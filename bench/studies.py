@@ -1,0 +1,466 @@
+"""Studies behind the report's study charts: plain computations that return tidy pandas DataFrames.
+
+Each study is one function of a frozen config dataclass (sizes are fields, so a test can run a small one) and
+returns a DataFrame; ``reports`` only reads and plots these frames. ``STUDIES`` maps a study's name (also the
+name of its table in the results database) to its function and default config; ``ensure_studies`` reads the
+stored tables and computes the missing ones.
+
+* ``long_time_energy``: relative energy error against time for one representative per integrator family
+  (Euler grows, RK4 drifts, Verlet stays bounded, CVODE/heyoka near round-off).
+* ``stability_sweep``: max relative energy error over a fixed number of steps against k·h for every
+  fixed-step integrator, across its declared ``stability_limit_kh``.
+* ``precession_vs_latitude``: the swing plane's measured rate for many latitudes at once (one heyoka
+  ``taylor_adaptive_batch``, one batch element per latitude), against −Ω_E sin φ and its Airy correction.
+* ``seed_revisited``: the numbers behind the seed note's figures and their corrections (``reports.seed``).
+
+All runs go through the suite's own models and integrator registry; nothing here re-implements an equation of
+motion or an integrator.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Callable
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from bench.scenes import SEED_EARTH_RATE_RAD_S
+from bench.store import ResultsStore, setting_label
+from bench.verdicts import energy_scale, energy_verdicts, precession_rate
+from integrators import STATUS_OK, Problem, Solution, get_integrator
+from integrators.registry import REGISTRY
+from models import Model, PendulumParameters, get_model
+from models.analytic import linear_exact, seed_approximate, seed_gap_bound
+from models.parameters import SIDEREAL_EARTH_RATE_RAD_S, STANDARD_GRAVITY_M_S2
+
+
+# --------------------------------------------------------------------------------------------------------------
+# shared helpers
+# --------------------------------------------------------------------------------------------------------------
+def relative_energy_error(model: Model, params: PendulumParameters, states: np.ndarray) -> np.ndarray:
+    """(E(t) − E₀) / E_swing on the rows of ``states`` (columns x, y, ẋ, ẏ), with E₀ and E_swing from
+    ``bench.verdicts.energy_scale`` (the normalisation of the results table) and E from the model's own energy
+    source evaluated with numpy (``models.base``: the same source the compiled code uses)."""
+    energy0, swing = energy_scale(model, params)
+    energy = model.energy(np, states[:, 0], states[:, 1], states[:, 2], states[:, 3], params.parameter_vector())
+    return (energy - energy0) / swing
+
+
+def solve_with_setting(integrator_name: str, problem: Problem, setting: float) -> Solution:
+    """Run a registered integrator with ``setting`` read as k·h for fixed-step methods (step = setting / k)
+    and as the tolerance for adaptive ones. An unknown integrator becomes a failed solution, not a crash."""
+    try:
+        integrator = get_integrator(integrator_name)
+    except KeyError as error:
+        return Solution.failure(problem.t_out, str(error.args[0]))
+    if integrator.adaptive:
+        return integrator.solve(problem, tol=setting)
+    return integrator.solve(problem, step_s=setting / problem.params.pendulum_frequency_rad_s)
+
+
+def study_setting_label(integrator_name: str, setting: float) -> str:
+    """The results store's label ('kh=0.1' or 'tol=1e-12') for a study run's setting."""
+    integrator = REGISTRY.get(integrator_name)
+    if integrator is not None and not integrator.adaptive:
+        return setting_label(setting, None)
+    return setting_label(None, setting)
+
+
+def family_of(integrator_name: str) -> str:
+    integrator = REGISTRY.get(integrator_name)
+    return integrator.family if integrator is not None else "unknown"
+
+
+def _progress(items: list, description: str, show: bool):
+    return tqdm(items, desc=description, unit="run", disable=not show, leave=False)
+
+
+# --------------------------------------------------------------------------------------------------------------
+# long-time energy
+# --------------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class LongTimeEnergyConfig:
+    """One pendulum integrated for a long time by one representative per family.
+
+    ``runs`` pairs an integrator name with its setting (k·h for fixed-step, tolerance for adaptive).
+    Default: the Panthéon (L = 67 m, φ = 48.846°, A = 3 m) on the spherical model for 6 h (1317 swings);
+    CVODE and heyoka at tolerances that keep them near round-off over that span (measured over one sidereal
+    day: CVODE-Adams drifts to 1.7e-4 at tolerance 1e-10 and to 1.7e-7 at 1e-12; heyoka stays at 5e-13).
+    """
+
+    model: str = "spherical"
+    length_m: float = 67.0
+    latitude_deg: float = 48.846
+    amplitude_m: float = 3.0
+    duration_s: float = 21600.0
+    n_out: int = 4001
+    runs: tuple[tuple[str, float], ...] = (
+        ("explicit_euler", 0.05),
+        ("symplectic_euler", 0.05),
+        ("rk4", 0.05),
+        ("verlet", 0.05),
+        ("cvode_adams", 1e-12),
+        ("heyoka_taylor", 1e-15),
+    )
+
+
+def long_time_energy(config: LongTimeEnergyConfig = LongTimeEnergyConfig(), progress: bool = True) -> pd.DataFrame:
+    """Relative energy error (E − E₀)/E_swing (``relative_energy_error``) on a uniform output grid (t > 0) for
+    each configured run.
+
+    Columns: integrator, family, setting, status, message, t_s, energy_rel_error, plus the config's scalars.
+    Rows after a divergence carry NaN errors; a failed run keeps one row per output time, all NaN.
+    """
+    model = get_model(config.model)
+    params = PendulumParameters(length_m=config.length_m, latitude_deg=config.latitude_deg,
+                                amplitude_m=config.amplitude_m)
+    t_out = np.linspace(0.0, config.duration_s, config.n_out)
+    problem = Problem(model=model, params=params, t_out=t_out)
+    frames = []
+    for name, setting in _progress(list(config.runs), "long-time energy", progress):
+        solution = solve_with_setting(name, problem, setting)
+        frames.append(pd.DataFrame({
+            "integrator": name,
+            "family": family_of(name),
+            "setting": study_setting_label(name, setting),
+            "status": solution.status,
+            "message": solution.message,
+            "t_s": t_out[1:],
+            "energy_rel_error": relative_energy_error(model, params, solution.y)[1:],
+        }))
+    frame = pd.concat(frames, ignore_index=True)
+    return _with_config_columns(frame, config, exclude=("runs",))
+
+
+# --------------------------------------------------------------------------------------------------------------
+# stability sweep
+# --------------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class StabilitySweepConfig:
+    """Every registered fixed-step integrator on the linear model, ``steps`` steps at each k·h of ``kh``.
+
+    The linear model is the oscillator whose eigenvalues ±ik define ``stability_limit_kh`` (PHYSICS.md
+    "Integrators"); its Coriolis term shifts them by a/k ≈ 1e-4 only.
+    """
+
+    model: str = "linear"
+    length_m: float = 10.0
+    latitude_deg: float = 48.846
+    amplitude_m: float = 1.0
+    steps: int = 1000
+    kh: tuple[float, ...] = tuple(np.round(np.linspace(0.1, 4.0, 40), 6))
+
+
+def stability_sweep(config: StabilitySweepConfig = StabilitySweepConfig(), progress: bool = True) -> pd.DataFrame:
+    """Max relative energy error |E − E₀|/E_swing over every step (streamed by the fixed-step loop, scaled as in
+    ``bench.verdicts.energy_verdicts``) after ``steps`` steps, per integrator and k·h.
+
+    Columns: integrator, family, stability_limit_kh (NaN when unstable for every h), kh, steps_done,
+    energy_max_rel_error, status, message, plus the config's scalars.
+    """
+    model = get_model(config.model)
+    params = PendulumParameters(length_m=config.length_m, latitude_deg=config.latitude_deg,
+                                amplitude_m=config.amplitude_m)
+    k = params.pendulum_frequency_rad_s
+    fixed_step = sorted(name for name, integrator in REGISTRY.items() if not integrator.adaptive)
+    rows = []
+    for name, kh in _progress([(n, kh) for n in fixed_step for kh in config.kh], "stability sweep", progress):
+        integrator = REGISTRY[name]
+        step_s = kh / k
+        problem = Problem(model=model, params=params, t_out=np.linspace(0.0, config.steps * step_s, 11))
+        solution = integrator.solve(problem, step_s=step_s)
+        rows.append({
+            "integrator": name,
+            "family": integrator.family,
+            "stability_limit_kh": np.nan if integrator.stability_limit_kh is None else integrator.stability_limit_kh,
+            "kh": float(kh),
+            "steps_done": solution.steps,
+            "energy_max_rel_error": energy_verdicts(model, params, solution)["energy_max_rel_error_steps"],
+            "status": solution.status,
+            "message": solution.message,
+        })
+    return _with_config_columns(pd.DataFrame(rows), config, exclude=("kh",))
+
+
+# --------------------------------------------------------------------------------------------------------------
+# precession against latitude
+# --------------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class PrecessionLatitudeConfig:
+    """The Panthéon's pendulum (L = 67 m, A = 3 m) at ``n_latitudes`` latitudes from −90° to 90°, integrated
+    for ``duration_s`` by one heyoka Taylor batch integrator at tolerance ``tol``."""
+
+    model: str = "spherical"
+    length_m: float = 67.0
+    amplitude_m: float = 3.0
+    duration_s: float = 3600.0
+    n_latitudes: int = 37
+    tol: float = 1e-15
+
+
+def precession_vs_latitude(config: PrecessionLatitudeConfig = PrecessionLatitudeConfig(),
+                           progress: bool = True) -> pd.DataFrame:
+    """Measured swing-plane rate (rad/s, counter-clockwise about up positive) at each latitude.
+
+    One ``heyoka.taylor_adaptive_batch`` carries all latitudes (batch element i has the parameter vector of
+    latitude i); a non-terminal event on r·ṙ = 0 crossing downwards (a maximum of the radius) records each
+    turning point from heyoka's dense output, and ``bench.verdicts.precession_rate`` fits the rate
+    (PHYSICS.md "Measuring the precession rate"). Events at t = 0 (release from rest) are dropped, as in the
+    fixed-step turning-point detector.
+
+    Columns: latitude_deg, rate_rad_s, rate_stderr_rad_s, textbook_rate_rad_s (−Ω_E sin φ),
+    airy_rate_rad_s (−Ω_E sin φ (1 − (3/8)θ₀²), θ₀ = A/L; Airy 1851, Olsson 1981, PHYSICS.md "Airy precession"),
+    turning_points, plus the config's scalars.
+    """
+    import heyoka
+
+    model = get_model(config.model)
+    latitudes = np.linspace(-90.0, 90.0, config.n_latitudes)
+    params = [PendulumParameters(length_m=config.length_m, latitude_deg=float(lat), amplitude_m=config.amplitude_m)
+              for lat in latitudes]
+    state0 = np.ascontiguousarray(np.array([p.initial_state() for p in params]).T)
+    pars = np.ascontiguousarray(np.array([p.parameter_vector() for p in params]).T)
+    turning: list[list[tuple[float, float, float]]] = [[] for _ in params]
+
+    def record_turning_point(ta, time: float, direction_sign: int, batch_index: int) -> None:
+        if time <= 0.0:
+            return
+        times = ta.time.copy()
+        times[batch_index] = time
+        ta.update_d_output(times)
+        turning[batch_index].append((time, ta.d_output[0, batch_index], ta.d_output[1, batch_index]))
+
+    x, y, vx, vy = heyoka.make_vars("x", "y", "vx", "vy")
+    event = heyoka.nt_event_batch(x * vx + y * vy, record_turning_point,
+                                  direction=heyoka.event_direction.negative)
+    batch = heyoka.taylor_adaptive_batch(model.heyoka_system(), state0, pars=pars, tol=config.tol,
+                                         nt_events=[event], compact_mode=True)
+    chunks = np.linspace(0.0, config.duration_s, 11)[1:]
+    for t_chunk in _progress(list(chunks), "precession vs latitude", progress):
+        batch.propagate_until(float(t_chunk))
+    rows = []
+    theta0 = config.amplitude_m / config.length_m
+    for lat, p, points in zip(latitudes, params, turning):
+        rate, stderr = precession_rate(np.array(points, dtype=np.float64).reshape(-1, 3))
+        rows.append({
+            "latitude_deg": float(lat),
+            "rate_rad_s": rate,
+            "rate_stderr_rad_s": stderr,
+            "textbook_rate_rad_s": p.textbook_precession_rate_rad_s,
+            "airy_rate_rad_s": p.textbook_precession_rate_rad_s * (1.0 - 0.375 * theta0 ** 2),
+            "turning_points": len(points),
+        })
+    return _with_config_columns(pd.DataFrame(rows), config, exclude=())
+
+
+# --------------------------------------------------------------------------------------------------------------
+# the seed note revisited
+# --------------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SeedConfig:
+    """Assumptions for the seed note's figures, which give no numbers beyond ω = 2π/24 h and "2 minutes".
+
+    Assumed (stated in the report): L = 10 m, y₀ = 0.5 m, latitude 45° (the seed's colatitude λ = 45°),
+    released from rest at y = y₀ (seed §3), explicit Euler with h = 1 ms on the seed's eqs. (4)-(5), a
+    reference of RK4 at h/4 on the same equations.
+    """
+
+    length_m: float = 10.0
+    latitude_deg: float = 45.0
+    amplitude_m: float = 0.5
+    duration_s: float = 120.0
+    output_spacing_s: float = 0.05
+    euler_step_s: float = 1e-3
+    reference_step_s: float = 2.5e-4
+
+
+@dataclass
+class SeedStudy:
+    """The seed study's series (time on a common grid) and the scalar findings quoted in the report.
+
+    ``series`` columns: t_s; seed_x_m, seed_y_m (eqs. 14-15, ω = 2π/24 h); exact_x_m, exact_y_m (exact linear
+    solution, sidereal Ω_E); euler_energy_rel_error, euler_energy_theory (1 + (kh)²)ⁿ − 1,
+    symplectic_energy_rel_error, verlet_energy_rel_error, model_energy_rel_error (the reference run of eqs.
+    4-5: the model's own energy change), model_energy_formula (∫ dE/dt of the model, PHYSICS.md "Models" 3);
+    seed_difference_m |r_Euler − r_eqs.14-15|; euler_error_m |r_Euler − r_ref|; model_difference_m
+    |r_ref(eqs. 4-5) − r_exact(eqs. 6-7)|; approximation_gap_m |r_eqs.14-15 − r_exact|;
+    approximation_gap_bound_m A·seed_gap_bound; day_length_difference_m |r_exact(sidereal) − r_exact(24 h)|;
+    verlet_linear_error_m |r_Verlet(eqs. 6-7) − r_exact|.
+    ``numbers``: scalar findings (SI units or dimensionless, named with their unit).
+    """
+
+    config: SeedConfig
+    series: pd.DataFrame
+    numbers: dict[str, float] = field(default_factory=dict)
+
+
+def _params(config: SeedConfig, earth_rate_rad_s: float) -> PendulumParameters:
+    return PendulumParameters(length_m=config.length_m, latitude_deg=config.latitude_deg,
+                              amplitude_m=config.amplitude_m, earth_rate_rad_s=earth_rate_rad_s)
+
+
+def _checked(solution: Solution, what: str) -> np.ndarray:
+    if solution.status != STATUS_OK:
+        raise RuntimeError(f"seed study: {what} ended with status {solution.status}: {solution.message}")
+    return solution.y
+
+
+def _distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.hypot(a[:, 0] - b[:, 0], a[:, 1] - b[:, 1])
+
+
+def centrifugal_check(config: SeedConfig, position_m: tuple[float, float] = (0.3, 0.4)) -> dict[str, float]:
+    """−ω×(ω×r) (per unit mass, m/s²) at r = (x, y, 0) in the seed's frame with ω = Ω(−sin λ, 0, cos λ)
+    (λ the colatitude), computed with numpy's cross product, next to the seed's printed expansion
+    (xω², −yω², 0) (seed §2). Source: the vector identity ω×(ω×r) = ω(ω·r) − r|ω|²."""
+    colatitude = math.radians(90.0 - config.latitude_deg)
+    omega = SEED_EARTH_RATE_RAD_S * np.array([-math.sin(colatitude), 0.0, math.cos(colatitude)])
+    r = np.array([position_m[0], position_m[1], 0.0])
+    correct = -np.cross(omega, np.cross(omega, r))
+    w2 = SEED_EARTH_RATE_RAD_S ** 2
+    return {
+        "centrifugal_x_m": position_m[0], "centrifugal_y_m": position_m[1],
+        "centrifugal_correct_x_m_s2": correct[0], "centrifugal_correct_y_m_s2": correct[1],
+        "centrifugal_correct_z_m_s2": correct[2],
+        "centrifugal_seed_x_m_s2": position_m[0] * w2, "centrifugal_seed_y_m_s2": -position_m[1] * w2,
+        "centrifugal_over_gravity": float(np.linalg.norm(correct)) / STANDARD_GRAVITY_M_S2,
+    }
+
+
+def seed_revisited(config: SeedConfig = SeedConfig()) -> SeedStudy:
+    """Reproduce the seed note's three figures and the numbers that correct them (see ``SeedStudy``)."""
+    linear = get_model("linear")
+    seed_planar = get_model("seed_planar")
+    seed_params = _params(config, SEED_EARTH_RATE_RAD_S)
+    sidereal_params = _params(config, SIDEREAL_EARTH_RATE_RAD_S)
+    t = np.linspace(0.0, config.duration_s, int(round(config.duration_s / config.output_spacing_s)) + 1)
+    seed_problem = Problem(model=seed_planar, params=seed_params, t_out=t)
+
+    approx = seed_approximate(seed_params, t)
+    exact_seed_rate = linear_exact(seed_params, t)
+    exact = linear_exact(sidereal_params, t)
+    euler = _checked(get_integrator("explicit_euler").solve(seed_problem, step_s=config.euler_step_s), "Euler")
+    symplectic = _checked(get_integrator("symplectic_euler").solve(seed_problem, step_s=config.euler_step_s),
+                          "symplectic Euler")
+    verlet = _checked(get_integrator("verlet").solve(seed_problem, step_s=config.euler_step_s), "Verlet")
+    reference = _checked(get_integrator("rk4").solve(seed_problem, step_s=config.reference_step_s), "reference")
+    verlet_linear = _checked(get_integrator("verlet").solve(
+        Problem(model=linear, params=sidereal_params, t_out=t), step_s=config.euler_step_s), "Verlet (linear)")
+
+    kh = seed_params.pendulum_frequency_rad_s * config.euler_step_s
+    # ∫ dE/dt dt along the reference, dE/dt = (2Ω_E cos φ / L) ẏ (xẋ + yẏ) (PHYSICS.md "Models" 3)
+    coefficient = 2.0 * SEED_EARTH_RATE_RAD_S * math.cos(seed_params.latitude_rad) / config.length_m
+    x, y, vx, vy = reference.T
+    power = coefficient * vy * (x * vx + y * vy)
+    formula = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(t))])
+    formula /= energy_scale(seed_planar, seed_params)[1]
+
+    series = pd.DataFrame({
+        "t_s": t,
+        "seed_x_m": approx[:, 0], "seed_y_m": approx[:, 1],
+        "exact_x_m": exact[:, 0], "exact_y_m": exact[:, 1],
+        "euler_energy_rel_error": relative_energy_error(seed_planar, seed_params, euler),
+        "euler_energy_theory": (1.0 + kh * kh) ** (t / config.euler_step_s) - 1.0,
+        "symplectic_energy_rel_error": relative_energy_error(seed_planar, seed_params, symplectic),
+        "verlet_energy_rel_error": relative_energy_error(seed_planar, seed_params, verlet),
+        "model_energy_rel_error": relative_energy_error(seed_planar, seed_params, reference),
+        "model_energy_formula": formula,
+        "seed_difference_m": _distance(euler, approx),
+        "euler_error_m": _distance(euler, reference),
+        "model_difference_m": _distance(reference, exact_seed_rate),
+        "approximation_gap_m": _distance(approx, exact_seed_rate),
+        "approximation_gap_bound_m": config.amplitude_m * seed_gap_bound(seed_params, t),
+        "day_length_difference_m": _distance(exact, exact_seed_rate),
+        "verlet_linear_error_m": _distance(verlet_linear, exact),
+    })
+    numbers = {
+        "kh": kh,
+        "euler_steps": config.duration_s / config.euler_step_s,
+        "solar_day_rate_rad_s": SEED_EARTH_RATE_RAD_S,
+        "sidereal_rate_rad_s": SIDEREAL_EARTH_RATE_RAD_S,
+        "day_rate_shortfall": 1.0 - SEED_EARTH_RATE_RAD_S / SIDEREAL_EARTH_RATE_RAD_S,
+        "seed_max_sideways_m": float(np.max(np.abs(approx[:, 0]))),
+        "exact_max_sideways_m": float(np.max(np.abs(exact[:, 0]))),
+        "euler_energy_final": float(series["euler_energy_rel_error"].iloc[-1]),
+        "euler_energy_theory_final": float(series["euler_energy_theory"].iloc[-1]),
+        "symplectic_energy_max": float(series["symplectic_energy_rel_error"].abs().max()),
+        "verlet_energy_max": float(series["verlet_energy_rel_error"].abs().max()),
+        "model_energy_max": float(series["model_energy_rel_error"].abs().max()),
+        "model_energy_formula_max": float(np.max(np.abs(formula))),
+        "model_energy_formula_mismatch": float(np.max(np.abs(formula - series["model_energy_rel_error"]))),
+        "seed_difference_max_m": float(series["seed_difference_m"].max()),
+        "euler_error_max_m": float(series["euler_error_m"].max()),
+        "model_difference_max_m": float(series["model_difference_m"].max()),
+        "approximation_gap_max_m": float(series["approximation_gap_m"].max()),
+        "approximation_gap_bound_max_m": float(series["approximation_gap_bound_m"].max()),
+        "approximation_gap_bound_day_m": config.amplitude_m * float(np.max(seed_gap_bound(
+            seed_params, 2.0 * math.pi / SIDEREAL_EARTH_RATE_RAD_S
+            + np.linspace(0.0, seed_params.small_swing_period_s, 1001)))),
+        "day_length_difference_max_m": float(series["day_length_difference_m"].max()),
+        "verlet_linear_error_max_m": float(series["verlet_linear_error_m"].max()),
+        **centrifugal_check(config),
+    }
+    return SeedStudy(config=config, series=series, numbers=numbers)
+
+
+# --------------------------------------------------------------------------------------------------------------
+# registry of the stored studies
+# --------------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Study:
+    """A study stored as a table named ``name`` in the results database."""
+
+    name: str
+    compute: Callable[..., pd.DataFrame]
+    config: object
+
+
+STUDIES: dict[str, Study] = {
+    study.name: study
+    for study in (
+        Study("study_long_time_energy", long_time_energy, LongTimeEnergyConfig()),
+        Study("study_stability", stability_sweep, StabilitySweepConfig()),
+        Study("study_precession_latitude", precession_vs_latitude, PrecessionLatitudeConfig()),
+    )
+}
+
+
+def ensure_studies(store: ResultsStore | None, recompute: bool = False, configs: dict[str, object] | None = None,
+                   progress: bool = True) -> dict[str, pd.DataFrame]:
+    """Every study's table: read from ``store`` (``read_table``) or, when missing or ``recompute``, computed
+    with its config (``configs`` overrides the defaults by study name) and written back (``write_table``).
+    ``store`` may be None: everything is computed and nothing is written."""
+    configs = configs or {}
+    tables = {}
+    for name, study in STUDIES.items():
+        stored = None
+        if store is not None and not recompute:
+            try:
+                stored = store.read_table(name)
+            except KeyError:
+                stored = None
+        if stored is None or stored.empty:
+            stored = study.compute(configs.get(name, study.config), progress=progress)
+            if store is not None:
+                store.write_table(name, stored)
+        tables[name] = stored
+    return tables
+
+
+def _with_config_columns(frame: pd.DataFrame, config: object, exclude: tuple[str, ...]) -> pd.DataFrame:
+    """Add the config's scalar fields as constant columns (``config_<field>``) so a stored table says how it
+    was made."""
+    for name, value in asdict(config).items():
+        if name not in exclude:
+            frame[f"config_{name}"] = value
+    return frame
+
+
+__all__ = [
+    "LongTimeEnergyConfig", "PrecessionLatitudeConfig", "STUDIES", "SeedConfig", "SeedStudy",
+    "StabilitySweepConfig", "Study", "ensure_studies", "long_time_energy", "precession_vs_latitude",
+    "relative_energy_error", "seed_revisited", "solve_with_setting", "stability_sweep",
+]

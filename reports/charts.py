@@ -1,0 +1,369 @@
+"""The report's charts: each function reads plain DataFrames (results rows or study tables) and writes one
+figure as PNG and SVG. Nothing here computes a result; ``bench.studies`` and ``reports.tables`` do.
+
+Conventions shared by every chart:
+
+* colour = integrator family (``family_colour``, the same in every chart and report), marker and line
+  pattern = integrator within its family, solid-type lines = fixed-step sweeps (k·h), dashed-type lines =
+  tolerance sweeps;
+* runs that diverged or failed are never dropped: they are drawn as a marker on the top edge of the axes at
+  their cost (▲ diverged, ✕ failed; at the left edge when the cost is unknown); an ok run without a finite,
+  positive value is drawn on the bottom edge (▽);
+* log axes wherever values span decades; axis labels carry units.
+
+Figures are built with ``matplotlib.figure.Figure`` (no pyplot state), so importing this module never changes
+the backend an interactive session uses; saving renders with Agg.
+"""
+
+from __future__ import annotations
+
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+
+from integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
+from integrators.registry import REGISTRY
+from models.parameters import SIDEREAL_EARTH_RATE_RAD_S
+
+FAMILY_COLOURS: dict[str, str] = {
+    "euler": "#d62728",
+    "runge-kutta": "#1f77b4",
+    "verlet": "#2ca02c",
+    "multistep": "#9467bd",
+    "taylor": "#ff7f0e",
+}
+"""Fixed colours of the known families; other families get one of ``SPARE_COLOURS`` by a stable hash."""
+
+SPARE_COLOURS = ("#8c564b", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f", "#393b79", "#637939")
+INTEGRATOR_MARKERS = ("o", "s", "D", "v", "P", "*", "h", "<", ">", "p")
+FIXED_STEP_LINESTYLES = ("-", "-.", (0, (1, 1)))
+"""Solid family: fixed-step sweeps; the second and third integrator of a family get dash-dot and dotted."""
+ADAPTIVE_LINESTYLES = ("--", (0, (6, 2, 1, 2, 1, 2)), (0, (3, 3)))
+"""Dashed family: tolerance sweeps."""
+DIVERGED_MARKER = "^"
+FAILED_MARKER = "X"
+NO_VALUE_MARKER = "v"
+LOG_FLOOR = 1e-17
+"""Values below this (exact zeros included) are drawn at it on log axes; captions say so."""
+
+
+# --------------------------------------------------------------------------------------------------------------
+# styles
+# --------------------------------------------------------------------------------------------------------------
+def family_colour(family: str) -> str:
+    if family in FAMILY_COLOURS:
+        return FAMILY_COLOURS[family]
+    return SPARE_COLOURS[zlib.crc32(family.encode()) % len(SPARE_COLOURS)]
+
+
+def integrator_style(integrator: str, family: str, adaptive: bool | None = None) -> dict:
+    """Colour (family), marker and line style (rank of the name within its family in the registry; solid
+    family for fixed-step, dashed family for adaptive)."""
+    registered = REGISTRY.get(integrator)
+    if adaptive is None:
+        adaptive = bool(registered.adaptive) if registered is not None else False
+    siblings = sorted({name for name, item in REGISTRY.items() if item.family == family} | {integrator})
+    rank = siblings.index(integrator)
+    linestyles = ADAPTIVE_LINESTYLES if adaptive else FIXED_STEP_LINESTYLES
+    return {
+        "color": family_colour(family),
+        "marker": INTEGRATOR_MARKERS[rank % len(INTEGRATOR_MARKERS)],
+        "linestyle": linestyles[rank % len(linestyles)],
+    }
+
+
+def _ordered_integrators(frame: pd.DataFrame) -> list[tuple[str, str]]:
+    """(integrator, family) pairs present in ``frame``, grouped by family, then by name."""
+    pairs = frame[["integrator", "family"]].drop_duplicates()
+    return sorted(((row.integrator, row.family) for row in pairs.itertuples()), key=lambda p: (p[1], p[0]))
+
+
+def save(figure: Figure, stem: Path) -> Path:
+    """Write ``stem``.png (120 dpi) and ``stem``.svg; return the stem."""
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(stem.with_suffix(".png"), dpi=120)
+    figure.savefig(stem.with_suffix(".svg"))
+    return stem
+
+
+# --------------------------------------------------------------------------------------------------------------
+# edge markers for runs without a plottable value
+# --------------------------------------------------------------------------------------------------------------
+def mark_on_edge(axes: Axes, x_values: np.ndarray, colour: str, marker: str, edge: str,
+                 first_left_slot: int = 0) -> int:
+    """Markers on the top (``edge='top'``) or bottom edge of ``axes`` at data x, drawn outside the clip box so
+    they stay visible. Markers whose x is not finite and positive go to the left edge, side by side from slot
+    ``first_left_slot`` on; returns how many went there."""
+    x = np.asarray(x_values, dtype=float)
+    if x.size == 0:
+        return 0
+    y = 1.0 if edge == "top" else 0.0
+    known = np.isfinite(x) & (x > 0)
+    style = {"marker": marker, "markersize": 9, "linestyle": "none", "markerfacecolor": colour,
+             "markeredgecolor": "black", "clip_on": False, "zorder": 5}
+    if known.any():
+        axes.plot(x[known], np.full(known.sum(), y), transform=axes.get_xaxis_transform(), **style)
+    unknown = int((~known).sum())
+    if unknown:
+        slots = 0.015 + 0.03 * (first_left_slot + np.arange(unknown))
+        axes.plot(slots, np.full(unknown, y), transform=axes.transAxes, **style)
+    return unknown
+
+
+def outcome_legend_handles() -> list[Line2D]:
+    """Legend entries explaining the edge markers."""
+    common = {"linestyle": "none", "markerfacecolor": "white", "markeredgecolor": "black", "markersize": 8}
+    return [
+        Line2D([], [], marker=DIVERGED_MARKER, label="diverged (drawn on the top edge)", **common),
+        Line2D([], [], marker=FAILED_MARKER, label="failed (drawn on the top edge)", **common),
+        Line2D([], [], marker=NO_VALUE_MARKER, label="ok, no finite positive value (bottom edge)", **common),
+    ]
+
+
+def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str) -> list[Line2D]:
+    """One line per integrator through its ok runs (sorted by x); diverged and failed runs and ok runs without
+    a plottable value as edge markers. Returns one legend handle per integrator, labelled with its counts of
+    diverged and failed runs."""
+    handles = []
+    left_slots = {"top": 0, "bottom": 0}
+    for integrator, family in _ordered_integrators(frame):
+        rows = frame[frame["integrator"] == integrator]
+        adaptive = bool(rows["tol"].notna().any()) if "tol" in rows else None
+        style = integrator_style(integrator, family, adaptive)
+        ok = rows[rows["status"] == STATUS_OK]
+        x = ok[x_column].to_numpy(dtype=float)
+        y = ok[y_column].to_numpy(dtype=float)
+        plottable = np.isfinite(x) & (x > 0) & np.isfinite(y) & (y > 0)
+        order = np.argsort(x[plottable])
+        counts = [f"{int((rows['status'] == status).sum())} {status}" for status in (STATUS_DIVERGED, STATUS_FAILED)
+                  if (rows["status"] == status).any()]
+        label = integrator + (f" ({', '.join(counts)})" if counts else "")
+        (line,) = axes.plot(x[plottable][order], y[plottable][order], label=label, markersize=5, **style)
+        handles.append(line)
+        left_slots["bottom"] += mark_on_edge(axes, x[~plottable], style["color"], NO_VALUE_MARKER, "bottom",
+                                             left_slots["bottom"])
+        for status, marker in ((STATUS_DIVERGED, DIVERGED_MARKER), (STATUS_FAILED, FAILED_MARKER)):
+            left_slots["top"] += mark_on_edge(axes, rows.loc[rows["status"] == status, x_column].to_numpy(dtype=float),
+                                              style["color"], marker, "top", left_slots["top"])
+    return handles
+
+
+# --------------------------------------------------------------------------------------------------------------
+# charts of the results table
+# --------------------------------------------------------------------------------------------------------------
+VERDICT_LABELS: dict[str, tuple[str, str]] = {
+    "reference_error": ("reference error", "max |r − r_ref| / A"),
+    "energy_max_rel_error": ("energy error", "max |E − E₀| / E_swing"),
+    "precession_rate_ref_error": ("precession-rate error", "|rate − rate_ref| / (Ω_E |sin φ|)"),
+    "analytic_gap_exact": ("analytic gap", "max |r − r_exact, linear| / A"),
+}
+"""Verdict column → (short title, axis label) for the work-precision charts."""
+
+COST_LABELS: dict[str, str] = {
+    "wall_time_s": "wall time per run (s), median of repeats",
+    "nfev": "right-hand-side evaluations (heyoka: Taylor steps)",
+}
+
+
+def work_precision(scene_frame: pd.DataFrame, verdict: str, stem: Path) -> Path:
+    """Verdict against wall time and against right-hand-side evaluations for one scene, one line per
+    integrator, fixed-step and tolerance sweeps on the same axes."""
+    scene = scene_frame["scene"].iloc[0]
+    title, label = VERDICT_LABELS[verdict]
+    figure = Figure(figsize=(13.5, 5.2), layout="constrained")
+    axes_pair = figure.subplots(1, 2, sharey=True)
+    handles = []
+    for axes, cost in zip(axes_pair, COST_LABELS):
+        handles = plot_sweeps(axes, scene_frame, cost, verdict)
+        axes.set_xscale("log")
+        axes.set_yscale("log")
+        axes.set_xlabel(COST_LABELS[cost])
+        axes.grid(True, which="major", alpha=0.3)
+    axes_pair[0].set_ylabel(label)
+    figure.suptitle(f"{scene}: {title} against cost (lower left is better)", fontsize=12)
+    figure.legend(handles=handles + outcome_legend_handles(), loc="outside right upper", fontsize=9)
+    return save(figure, stem)
+
+
+def convergence(scene_frame: pd.DataFrame, orders: dict[str, float], stem: Path) -> Path:
+    """Reference error against step size for the fixed-step integrators of one scene; ``orders`` maps an
+    integrator to its fitted order (shown in the legend)."""
+    scene = scene_frame["scene"].iloc[0]
+    fixed = scene_frame[scene_frame["tol"].isna()]
+    figure = Figure(figsize=(9.5, 5.2), layout="constrained")
+    axes = figure.subplots()
+    handles = plot_sweeps(axes, fixed, "step_s", "reference_error")
+    for handle, (integrator, _) in zip(handles, _ordered_integrators(fixed)):
+        order = orders.get(integrator)
+        fitted = "no fit" if order is None or not np.isfinite(order) else f"fitted order {order:.2f}"
+        handle.set_label(f"{handle.get_label()}, {fitted}")
+    axes.set_xscale("log")
+    axes.set_yscale("log")
+    axes.set_xlabel("step size h (s)")
+    axes.set_ylabel("reference error, max |r − r_ref| / A")
+    axes.grid(True, which="major", alpha=0.3)
+    axes.set_title(f"{scene}: convergence of the fixed-step integrators", pad=14)
+    figure.legend(handles=handles + outcome_legend_handles()[:2], loc="outside right upper", fontsize=9)
+    return save(figure, stem)
+
+
+# --------------------------------------------------------------------------------------------------------------
+# charts of the study tables
+# --------------------------------------------------------------------------------------------------------------
+def long_time_energy(table: pd.DataFrame, stem: Path) -> Path:
+    """|E − E₀|/E_swing against time on log-log axes, one run of the long-time energy study per colour: the
+    largest value so far (bold) over the values themselves (faint), so that bounded, drifting and growing
+    errors read apart."""
+    figure = Figure(figsize=(11, 5.6), layout="constrained")
+    axes = figure.subplots()
+    handles = []
+    for integrator, family in _ordered_integrators(table):
+        rows = table[table["integrator"] == integrator]
+        style = integrator_style(integrator, family)
+        status = rows["status"].iloc[0]
+        t = rows["t_s"].to_numpy(dtype=float)
+        error = np.abs(rows["energy_rel_error"].to_numpy(dtype=float))
+        finite = np.isfinite(error)
+        label = f"{integrator} ({rows['setting'].iloc[0]})" + ("" if status == STATUS_OK else f": {status}")
+        shown = np.maximum(error[finite], LOG_FLOOR)
+        axes.plot(t[finite], shown, color=style["color"], linestyle="-", linewidth=0.5, alpha=0.25)
+        (line,) = axes.plot(t[finite], np.maximum.accumulate(shown) if shown.size else shown, label=label,
+                            color=style["color"], linestyle=style["linestyle"], linewidth=1.8)
+        handles.append(line)
+        if status != STATUS_OK:
+            last = t[finite][-1] if finite.any() else np.nan
+            mark_on_edge(axes, np.array([last]), style["color"],
+                         DIVERGED_MARKER if status == STATUS_DIVERGED else FAILED_MARKER, "top")
+    axes.set_xscale("log")
+    axes.set_yscale("log")
+    axes.set_xlabel("time t (s)")
+    axes.set_ylabel("relative energy error |E(t) − E₀| / E_swing")
+    axes.grid(True, which="major", alpha=0.3)
+    first = table.iloc[0]
+    axes.set_title(f"Long-time energy: {first['config_model']} model, L = {first['config_length_m']:g} m, "
+                   f"φ = {first['config_latitude_deg']:g}°, A = {first['config_amplitude_m']:g} m", pad=14)
+    figure.legend(handles=handles + outcome_legend_handles()[:2], loc="outside right upper", fontsize=9)
+    return save(figure, stem)
+
+
+def stability(table: pd.DataFrame, stem: Path) -> Path:
+    """Max relative energy error after a fixed number of steps against k·h, one panel per fixed-step
+    integrator, with its declared stability limit drawn."""
+    integrators = _ordered_integrators(table)
+    columns = 2
+    rows_of_panels = (len(integrators) + columns - 1) // columns
+    figure = Figure(figsize=(12, 3.6 * rows_of_panels + 0.6), layout="constrained")
+    panels = np.atleast_1d(figure.subplots(rows_of_panels, columns, sharex=True, sharey=True, squeeze=False)).ravel()
+    for axes, (integrator, family) in zip(panels, integrators):
+        rows = table[table["integrator"] == integrator].sort_values("kh")
+        style = integrator_style(integrator, family)
+        x = rows["kh"].to_numpy(dtype=float)
+        y = rows["energy_max_rel_error"].to_numpy(dtype=float)
+        ok = (rows["status"] == STATUS_OK).to_numpy()
+        axes.plot(x[ok], np.maximum(y[ok], LOG_FLOOR), color=style["color"], marker=style["marker"],
+                  markersize=4, linestyle="-")
+        statuses = rows["status"].to_numpy()
+        mark_on_edge(axes, x[statuses == STATUS_DIVERGED], style["color"], DIVERGED_MARKER, "top")
+        mark_on_edge(axes, x[statuses == STATUS_FAILED], style["color"], FAILED_MARKER, "top")
+        limit = float(rows["stability_limit_kh"].iloc[0])
+        if np.isfinite(limit):
+            axes.axvline(limit, color="black", linestyle="--", linewidth=1)
+            axes.axvspan(limit, max(x.max(), limit) * 1.02, color="#d62728", alpha=0.07)
+            axes.text(limit, 0.04, f" theoretical limit kh = {limit:.3g}", transform=axes.get_xaxis_transform(),
+                      fontsize=9)
+        else:
+            axes.text(0.02, 0.04, "no stability limit: unstable for every h > 0", transform=axes.transAxes,
+                      fontsize=9)
+        axes.set_yscale("log")
+        axes.set_title(integrator, pad=12)
+        axes.grid(True, which="major", alpha=0.3)
+    for axes in panels[len(integrators):]:
+        axes.set_visible(False)
+    for axes in panels[::columns]:
+        axes.set_ylabel("max |E − E₀| / E_swing")
+    for axes in panels[-columns:]:
+        axes.set_xlabel("k·h (step in units of 1/k = √(L/g))")
+    first = table.iloc[0]
+    figure.suptitle(f"Stability: {int(first['config_steps'])} steps of the {first['config_model']} model at each k·h "
+                    "(shaded: beyond the theoretical limit)")
+    figure.legend(handles=outcome_legend_handles()[:2], loc="outside lower center", ncols=2, fontsize=9)
+    return save(figure, stem)
+
+
+def precession_latitude(table: pd.DataFrame, stem: Path) -> Path:
+    """Measured precession rate against latitude next to −Ω_E sin φ, and the residual in units of Ω_E with
+    the Airy correction."""
+    rows = table.sort_values("latitude_deg")
+    degrees_per_hour = np.degrees(1.0) * 3600.0
+    latitude = rows["latitude_deg"].to_numpy(dtype=float)
+    figure = Figure(figsize=(10, 8), layout="constrained")
+    top, bottom = figure.subplots(2, 1, sharex=True, height_ratios=(3, 2))
+    top.plot(latitude, rows["textbook_rate_rad_s"] * degrees_per_hour, color="black", linewidth=1,
+             label="textbook −Ω_E sin φ")
+    top.plot(latitude, rows["rate_rad_s"] * degrees_per_hour, "o", color=family_colour("taylor"), markersize=5,
+             label="measured (heyoka Taylor batch, turning points)")
+    top.set_ylabel("precession rate (°/h, counter-clockwise positive)")
+    top.axhline(0.0, color="grey", linewidth=0.6)
+    top.legend(fontsize=9)
+    top.grid(True, alpha=0.3)
+    residual = (rows["rate_rad_s"] - rows["textbook_rate_rad_s"]) / SIDEREAL_EARTH_RATE_RAD_S
+    airy = (rows["airy_rate_rad_s"] - rows["textbook_rate_rad_s"]) / SIDEREAL_EARTH_RATE_RAD_S
+    bottom.errorbar(latitude, residual, yerr=rows["rate_stderr_rad_s"] / SIDEREAL_EARTH_RATE_RAD_S, fmt="o",
+                    color=family_colour("taylor"), markersize=4, label="measured − textbook (±1 standard error)")
+    bottom.plot(latitude, airy, "--", color="black", linewidth=1, label="Airy: (3/8)θ₀² Ω_E sin φ")
+    bottom.axhline(0.0, color="grey", linewidth=0.6)
+    bottom.set_xlabel("latitude φ (°, north positive)")
+    bottom.set_ylabel("(rate − (−Ω_E sin φ)) / Ω_E")
+    bottom.legend(fontsize=9)
+    bottom.grid(True, alpha=0.3)
+    first = rows.iloc[0]
+    figure.suptitle(f"Precession against latitude: {first['config_model']} model, L = {first['config_length_m']:g} m, "
+                    f"A = {first['config_amplitude_m']:g} m, {first['config_duration_s'] / 3600:g} h per latitude")
+    return save(figure, stem)
+
+
+def adequacy(table: pd.DataFrame, stem: Path) -> Path:
+    """Per scene, what each simpler model gets wrong against the richer one (``bench.adequacy``): |precession
+    rate difference| in units of Ω_E|sin φ| and trajectory gap in units of A, measured (filled) next to the
+    leading-order expectation (hollow) where the physics gives one; dot plot on log axes."""
+    rows = table.reset_index(drop=True)
+    labels = [f"{r.scene}: {r.simpler_model} vs {r.model}" for r in rows.itertuples()]
+    figure = Figure(figsize=(13, 0.42 * len(rows) + 2.0), layout="constrained")
+    panels = figure.subplots(1, 2, sharey=True)
+    positions = np.arange(len(rows))
+    panel_columns = (
+        ("precession_rate_diff", "expected_rate_diff", "|rate(simpler) − rate(richer)| / (Ω_E |sin φ|)"),
+        ("trajectory_gap", "expected_trajectory_gap", "max |r(simpler) − r(richer)| / A"),
+    )
+    for axes, (measured_column, expected_column, label) in zip(panels, panel_columns):
+        measured = np.abs(rows[measured_column].to_numpy(dtype=float))
+        shown = np.isfinite(measured) & (measured > 0)
+        axes.plot(measured[shown], positions[shown], "o", color="#4c72b0", markersize=7, label="measured")
+        values = [measured[shown]]
+        if expected_column in rows:
+            expected = np.abs(rows[expected_column].to_numpy(dtype=float))
+            known = np.isfinite(expected) & (expected > 0)
+            axes.plot(expected[known], positions[known], "o", markerfacecolor="none", markeredgecolor="black",
+                      markersize=10, label="leading-order expectation")
+            values.append(expected[known])
+        for position in positions[~shown]:
+            axes.text(0.01, position, "no finite value", transform=axes.get_yaxis_transform(), va="center",
+                      fontsize=8)
+        axes.set_xscale("log")
+        finite = np.concatenate(values)
+        if finite.size:
+            centre = np.sqrt(finite.min() * finite.max())
+            half_span = max(10.0, np.sqrt(finite.max() / finite.min()) * 3.0)
+            axes.set_xlim(centre / half_span, centre * half_span)
+        axes.set_xlabel(label)
+        axes.grid(True, axis="x", alpha=0.3)
+    figure.legend(handles=panels[0].get_lines(), loc="outside lower center", ncols=2, fontsize=9)
+    panels[0].set_yticks(positions, labels, fontsize=9)
+    panels[0].set_ylim(len(rows) - 0.5, -0.5)
+    figure.suptitle("Model adequacy: what each simpler model gets wrong, per scene")
+    return save(figure, stem)

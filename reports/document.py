@@ -1,0 +1,195 @@
+"""A report as a list of blocks (headings, paragraphs, figures, tables), rendered twice: HTML and Markdown.
+
+One document model keeps index.html and REPORT.md identical in content. Figures are files beside the document
+(``<stem>.png`` and ``<stem>.svg``); tables are embedded (HTML via pandas ``to_html``, Markdown via pandas
+``to_markdown``, which uses ``tabulate``) and written beside it as CSV, Markdown, LaTeX and HTML files
+(``write_table_files``). Paths in blocks are relative to the document's folder, so the folder opens in a
+browser with no server.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+
+@dataclass
+class Heading:
+    text: str
+    level: int = 2
+
+
+@dataclass
+class Paragraph:
+    """Plain text; `backticks` become code, **double stars** bold, in both renderings."""
+
+    text: str
+
+
+@dataclass
+class Figure:
+    """An image pair ``<stem>.png`` / ``<stem>.svg`` (stem relative to the document's folder)."""
+
+    stem: str
+    caption: str
+
+
+@dataclass
+class Table:
+    """A table shown in the document (``display``, already formatted) with its files (``stem`` + .csv, .md,
+    .tex, .html, relative to the document's folder) and a description of its columns."""
+
+    title: str
+    display: pd.DataFrame
+    stem: str
+    column_notes: dict[str, str] = field(default_factory=dict)
+
+
+Block = Heading | Paragraph | Figure | Table
+
+
+# --------------------------------------------------------------------------------------------------------------
+# number formatting and table files
+# --------------------------------------------------------------------------------------------------------------
+def format_value(value: object, integer: bool = False) -> str:
+    """Three significant digits for reals (whole numbers when ``integer``), '–' for missing values."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    if value is None or value is pd.NA or (isinstance(value, float) and math.isnan(value)):
+        return "–"
+    if isinstance(value, float):
+        return f"{value:.0f}" if integer else f"{value:.3g}"
+    return str(value)
+
+
+def display_frame(frame: pd.DataFrame, integer_columns: frozenset[str] = frozenset()) -> pd.DataFrame:
+    """A copy of ``frame`` with every cell formatted as text (``format_value``)."""
+    shown = frame.astype(object).copy()
+    for column in shown.columns:
+        integer = column in integer_columns
+        shown[column] = [format_value(value, integer) for value in shown[column]]
+    return shown
+
+
+def write_table_files(frame: pd.DataFrame, folder: Path, stem: str, caption: str,
+                      integer_columns: frozenset[str] = frozenset()) -> pd.DataFrame:
+    """Write ``frame`` as ``<stem>.csv`` (full precision), ``.md``, ``.tex`` and ``.html`` (formatted) under
+    ``folder``; return the formatted frame."""
+    target = folder / stem
+    target.parent.mkdir(parents=True, exist_ok=True)
+    frame.to_csv(target.with_suffix(".csv"), index=False)
+    shown = display_frame(frame, integer_columns)
+    target.with_suffix(".md").write_text(f"**{caption}**\n\n{markdown_table(shown)}\n", encoding="utf-8")
+    target.with_suffix(".tex").write_text(
+        shown.to_latex(index=False, caption=caption, escape=True, longtable=len(shown) > 40), encoding="utf-8")
+    target.with_suffix(".html").write_text(
+        f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>{html.escape(caption)}</title></head>"
+        f"<body><h3>{html.escape(caption)}</h3>\n{html_table(shown)}\n</body></html>\n", encoding="utf-8")
+    return shown
+
+
+def markdown_table(shown: pd.DataFrame) -> str:
+    if shown.empty:
+        return "_(no rows)_"
+    return shown.to_markdown(index=False, disable_numparse=True)
+
+
+def html_table(shown: pd.DataFrame) -> str:
+    if shown.empty:
+        return "<p><em>(no rows)</em></p>"
+    return shown.to_html(index=False, escape=True, border=0, classes="data")
+
+
+# --------------------------------------------------------------------------------------------------------------
+# renderers
+# --------------------------------------------------------------------------------------------------------------
+def _inline_html(text: str) -> str:
+    escaped = html.escape(text)
+    escaped = re.sub(r"`([^`]+)`", r"<code>\1</code>", escaped)
+    return re.sub(r"\*\*([^*]+)\*\*", r"<strong>\1</strong>", escaped)
+
+
+def _anchor(text: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-")
+
+
+def _table_links(stem: str) -> list[tuple[str, str]]:
+    return [(kind, f"{stem}.{suffix}") for kind, suffix in
+            (("CSV", "csv"), ("Markdown", "md"), ("LaTeX", "tex"), ("HTML", "html"))]
+
+
+def render_markdown(title: str, blocks: list[Block]) -> str:
+    lines = [f"# {title}", ""]
+    for block in blocks:
+        if isinstance(block, Heading):
+            lines += ["#" * block.level + " " + block.text, ""]
+        elif isinstance(block, Paragraph):
+            lines += [block.text, ""]
+        elif isinstance(block, Figure):
+            lines += [f"![{block.caption}]({block.stem}.png)", "",
+                      f"*{block.caption}* ([SVG]({block.stem}.svg))", ""]
+        elif isinstance(block, Table):
+            links = ", ".join(f"[{kind}]({path})" for kind, path in _table_links(block.stem))
+            lines += [f"**{block.title}** ({links})", "", markdown_table(block.display), ""]
+            if block.column_notes:
+                lines += ["Columns: " + "; ".join(f"`{name}`: {note}" for name, note in block.column_notes.items()), ""]
+    return "\n".join(lines).rstrip() + "\n"
+
+
+_STYLE = """
+body { font-family: system-ui, sans-serif; max-width: 1250px; margin: 1.5em auto; padding: 0 1em; color: #222; }
+h1 { border-bottom: 2px solid #444; } h2 { border-bottom: 1px solid #bbb; margin-top: 2em; }
+figure { margin: 1.2em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
+figcaption { font-size: 0.92em; color: #444; }
+.table-wrap { overflow-x: auto; margin: 0.6em 0 1.2em 0; }
+table.data { border-collapse: collapse; font-size: 0.85em; }
+table.data th, table.data td { border: 1px solid #ccc; padding: 2px 6px; text-align: left; white-space: nowrap; }
+table.data th { background: #f0f0f0; }
+table.data td:last-child { white-space: normal; min-width: 22em; }
+.notes { font-size: 0.85em; color: #444; }
+nav ul { columns: 2; font-size: 0.92em; }
+"""
+
+
+def render_html(title: str, blocks: list[Block]) -> str:
+    toc = "".join(f"<li><a href='#{_anchor(b.text)}'>{html.escape(b.text)}</a></li>"
+                  for b in blocks if isinstance(b, Heading) and b.level == 2)
+    parts = [f"<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+             f"<style>{_STYLE}</style></head><body>", f"<h1>{html.escape(title)}</h1>",
+             f"<nav><ul>{toc}</ul></nav>"]
+    for block in blocks:
+        if isinstance(block, Heading):
+            parts.append(f"<h{block.level} id='{_anchor(block.text)}'>{html.escape(block.text)}</h{block.level}>")
+        elif isinstance(block, Paragraph):
+            parts.append(f"<p>{_inline_html(block.text)}</p>")
+        elif isinstance(block, Figure):
+            parts.append(f"<figure><a href='{block.stem}.svg'><img src='{block.stem}.png' "
+                         f"alt='{html.escape(block.caption)}'></a><figcaption>{_inline_html(block.caption)} "
+                         f"(<a href='{block.stem}.svg'>SVG</a>)</figcaption></figure>")
+        elif isinstance(block, Table):
+            links = ", ".join(f"<a href='{path}'>{kind}</a>" for kind, path in _table_links(block.stem))
+            parts.append(f"<p><strong>{html.escape(block.title)}</strong> ({links})</p>")
+            parts.append(f"<div class='table-wrap'>{html_table(block.display)}</div>")
+            if block.column_notes:
+                notes = "; ".join(f"<code>{html.escape(name)}</code>: {_inline_html(note)}"
+                                  for name, note in block.column_notes.items())
+                parts.append(f"<p class='notes'>Columns: {notes}</p>")
+    parts.append("</body></html>")
+    return "\n".join(parts) + "\n"
+
+
+def write_document(folder: Path, title: str, blocks: list[Block], html_name: str = "index.html",
+                   markdown_name: str = "REPORT.md") -> tuple[Path, Path]:
+    """Write the HTML and Markdown renderings of ``blocks`` into ``folder``; return their paths."""
+    folder.mkdir(parents=True, exist_ok=True)
+    html_path = folder / html_name
+    markdown_path = folder / markdown_name
+    html_path.write_text(render_html(title, blocks), encoding="utf-8")
+    markdown_path.write_text(render_markdown(title, blocks), encoding="utf-8")
+    return html_path, markdown_path

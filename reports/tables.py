@@ -1,0 +1,226 @@
+"""The report's tables, derived from the results rows (columns of ``bench.schema``) as plain DataFrames.
+
+* ``matched_accuracy``: one row per (scene, integrator): the cheapest setting (least median wall time) whose
+  reference error reaches ``target`` (1e-6 by default), its cost, or "not reached"; run counts by status.
+* ``shootout``: per scene, integrators ranked by efficiency = 1 / (reference error × wall time), best setting
+  of each.
+* ``convergence_orders``: the observed order of each fixed-step integrator per scene
+  (``bench.verdicts.observed_order``) next to its declared order.
+* ``compact_table`` / ``full_table``: the tidy results, a readable subset and every column.
+
+Every table keeps a row for every integrator present in the results, with the counts of ok, diverged and
+failed runs, so a run that failed appears with its status instead of vanishing. ``COLUMN_NOTES`` states each
+column's unit and meaning (from ``bench.schema`` plus the derived columns defined here).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from bench.schema import COLUMN_NAMES, COLUMNS
+from bench.store import setting_label
+from bench.verdicts import observed_order
+from integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
+from integrators.registry import REGISTRY
+
+MATCHED_ACCURACY_TARGET = 1e-6
+"""Reference error (max |r − r_ref| / A) a setting must reach to count in the matched-accuracy summary."""
+
+STATUSES = (STATUS_OK, STATUS_DIVERGED, STATUS_FAILED)
+
+DERIVED_NOTES: dict[str, str] = {
+    "runs": "runs stored for this scene and integrator",
+    "ok": "runs that finished",
+    "diverged": "runs whose state left the bounds or became non-finite",
+    "failed": "runs that raised an error (message in `note`)",
+    "outcome": "whether any ok run reached the target reference error",
+    "setting": "step as k·h (fixed-step) or tolerance (adaptive)",
+    "note": "first diverged/failed message of this scene and integrator",
+    "rank": "1 = most efficient in the scene",
+    "efficiency_per_s": "1/s; 1 / (reference_error × wall_time_s), best setting",
+    "declared_order": "classical order the integrator declares (empty: varies)",
+    "kind": "fixed-step (fitted) or adaptive (no step size to fit against)",
+    "fitted_order": "slope of log(reference_error) against log(step_s) over the ok runs",
+    "points": "ok runs with a finite positive reference error used in the fit",
+    "energy_error_first_hour": "max |E − E₀| / E_swing over t ≤ 1 h",
+    "energy_error_end": "|E − E₀| / E_swing at the last finite output time",
+    "end_s": "s; last output time with a finite state",
+    "stability_limit_kh": "largest stable k·h the integrator declares (empty: unstable for every h)",
+    "first_diverged_kh": "smallest k·h of the sweep whose run diverged within the sweep's steps",
+    "largest_kh_not_diverged": "largest k·h of the sweep below first_diverged_kh",
+    "simpler_model": "the simpler model of the pair (bench.adequacy)",
+    "scene_model": "the scene's own model",
+    "precession_rate_diff": "(rate of simpler − rate of richer model) / (Ω_E|sin φ|), signed",
+    "trajectory_gap": "max over the grid of |r_simpler − r_richer| / A",
+    "expected_rate_diff": "leading-order expectation of precession_rate_diff (Airy term), empty where none",
+    "expected_trajectory_gap": "leading-order expectation of trajectory_gap, empty where none",
+}
+COLUMN_NOTES: dict[str, str] = {
+    **{c.name: (f"{c.unit}; " if c.unit else "") + c.description for c in COLUMNS},
+    **DERIVED_NOTES,
+}
+INTEGER_COLUMNS: frozenset[str] = frozenset(
+    {c.name for c in COLUMNS if c.sql_type == "INTEGER"} | {"runs", "ok", "diverged", "failed", "rank", "points"})
+
+COMPACT_COLUMNS: tuple[str, ...] = (
+    "scene", "model", "integrator", "family", "kh", "tol", "status", "reference_error", "energy_max_rel_error",
+    "precession_rate_ref_error", "precession_rate_error", "analytic_gap_exact", "wall_time_s", "nfev", "message",
+)
+
+
+ADEQUACY_NOTES: dict[str, str] = {
+    "model": "the richer model of the pair",
+    "note": "remark of bench.adequacy on this pair",
+}
+"""Meanings that differ in the adequacy table (``bench.adequacy.model_adequacy``)."""
+
+
+def notes_for(frame: pd.DataFrame, overrides: dict[str, str] | None = None) -> dict[str, str]:
+    """Unit and meaning of each column of ``frame`` (``overrides`` first, then ``COLUMN_NOTES``)."""
+    notes = {**COLUMN_NOTES, **(overrides or {})}
+    return {column: notes[column] for column in frame.columns if column in notes}
+
+
+def _status_counts(group: pd.DataFrame) -> dict[str, object]:
+    counts: dict[str, object] = {"runs": len(group)}
+    counts.update({status: int((group["status"] == status).sum()) for status in STATUSES})
+    problems = group.loc[group["status"] != STATUS_OK, "message"].dropna()
+    problems = problems[problems.astype(str) != ""]
+    counts["note"] = "" if problems.empty else str(problems.iloc[0])
+    return counts
+
+
+def _groups(frame: pd.DataFrame):
+    return frame.groupby(["scene", "integrator"], sort=True)
+
+
+def _setting(row: pd.Series) -> str:
+    return setting_label(row["kh"], row["tol"])
+
+
+def matched_accuracy(frame: pd.DataFrame, target: float = MATCHED_ACCURACY_TARGET) -> pd.DataFrame:
+    """One row per (scene, integrator): the cheapest setting with reference_error ≤ ``target`` and its cost."""
+    rows = []
+    for (scene, integrator), group in _groups(frame):
+        ok = group[group["status"] == STATUS_OK]
+        reached = ok[ok["reference_error"] <= target]
+        row = {"scene": scene, "integrator": integrator, "family": group["family"].iloc[0]}
+        if not reached.empty:
+            best = reached.loc[reached["wall_time_s"].fillna(np.inf).idxmin()]
+            row.update(outcome="reached", setting=_setting(best), reference_error=best["reference_error"],
+                       wall_time_s=best["wall_time_s"], nfev=best["nfev"])
+        else:
+            outcome = "not reached" if not ok.empty else f"no ok run ({', '.join(sorted(set(group['status'])))})"
+            row.update(outcome=outcome, setting="", reference_error=ok["reference_error"].min(),
+                       wall_time_s=np.nan, nfev=np.nan)
+        row.update(_status_counts(group))
+        rows.append(row)
+    columns = ["scene", "integrator", "family", "outcome", "setting", "reference_error", "wall_time_s", "nfev",
+               "runs", "ok", "diverged", "failed", "note"]
+    return pd.DataFrame(rows, columns=columns)
+
+
+def shootout(frame: pd.DataFrame) -> pd.DataFrame:
+    """Per scene, integrators ranked by their best efficiency 1 / (reference_error × wall_time_s)."""
+    rows = []
+    for (scene, integrator), group in _groups(frame):
+        ok = group[group["status"] == STATUS_OK]
+        efficiency = 1.0 / (ok["reference_error"] * ok["wall_time_s"])
+        efficiency = efficiency[np.isfinite(efficiency) & (efficiency > 0)]
+        row = {"scene": scene, "integrator": integrator, "family": group["family"].iloc[0]}
+        if efficiency.empty:
+            row.update(setting="", reference_error=np.nan, wall_time_s=np.nan, efficiency_per_s=np.nan)
+        else:
+            best = ok.loc[efficiency.idxmax()]
+            row.update(setting=_setting(best), reference_error=best["reference_error"],
+                       wall_time_s=best["wall_time_s"], efficiency_per_s=efficiency.max())
+        row.update(_status_counts(group))
+        rows.append(row)
+    table = pd.DataFrame(rows)
+    table["rank"] = table.groupby("scene")["efficiency_per_s"].rank(ascending=False, method="min")
+    table = table.sort_values(["scene", "rank", "integrator"], na_position="last")
+    columns = ["scene", "rank", "integrator", "family", "setting", "reference_error", "wall_time_s",
+               "efficiency_per_s", "runs", "ok", "diverged", "failed", "note"]
+    return table[columns].reset_index(drop=True)
+
+
+def convergence_orders(frame: pd.DataFrame) -> pd.DataFrame:
+    """Per (scene, integrator): declared order and the order fitted on the ok fixed-step runs' reference error
+    against step size (``bench.verdicts.observed_order``; needs two or more distinct steps)."""
+    rows = []
+    for (scene, integrator), group in _groups(frame):
+        registered = REGISTRY.get(integrator)
+        fixed = group[group["tol"].isna() & (group["status"] == STATUS_OK)]
+        usable = fixed[(fixed["reference_error"] > 0) & np.isfinite(fixed["reference_error"]) & (fixed["step_s"] > 0)]
+        adaptive = bool(group["tol"].notna().all())
+        fitted = np.nan
+        if not adaptive and usable["step_s"].nunique() >= 2:
+            fitted = observed_order(usable["step_s"].to_numpy(float), usable["reference_error"].to_numpy(float))
+        rows.append({
+            "scene": scene, "integrator": integrator, "family": group["family"].iloc[0],
+            "declared_order": None if registered is None else registered.order,
+            "kind": "adaptive" if adaptive else "fixed-step", "fitted_order": fitted,
+            "points": len(usable), **_status_counts(group),
+        })
+    return pd.DataFrame(rows)
+
+
+def orders_by_integrator(orders: pd.DataFrame, scene: str) -> dict[str, float]:
+    """integrator → fitted order (float) for one scene, from ``convergence_orders``."""
+    rows = orders[orders["scene"] == scene]
+    return {row.integrator: float(row.fitted_order) for row in rows.itertuples() if row.kind == "fixed-step"}
+
+
+def _sorted_rows(frame: pd.DataFrame) -> pd.DataFrame:
+    return frame.sort_values(["scene", "integrator", "step_s", "tol"], na_position="last").reset_index(drop=True)
+
+
+def full_table(frame: pd.DataFrame) -> pd.DataFrame:
+    """Every column of the results, one row per run, sorted by scene, integrator and setting."""
+    return _sorted_rows(frame)[list(COLUMN_NAMES)]
+
+
+def compact_table(frame: pd.DataFrame) -> pd.DataFrame:
+    """The identity, outcome, main verdicts and cost of every run (``COMPACT_COLUMNS``)."""
+    return _sorted_rows(frame)[list(COMPACT_COLUMNS)]
+
+
+# --------------------------------------------------------------------------------------------------------------
+# summaries of the study tables
+# --------------------------------------------------------------------------------------------------------------
+def long_time_summary(energy: pd.DataFrame) -> pd.DataFrame:
+    """Per run of the long-time energy study: status, max error over the first hour, error at the end."""
+    rows = []
+    for (integrator, setting), run in energy.groupby(["integrator", "setting"], sort=True):
+        error = run["energy_rel_error"].abs()
+        finite = run[error.notna()]
+        rows.append({
+            "integrator": integrator, "family": run["family"].iloc[0], "setting": setting,
+            "status": run["status"].iloc[0],
+            "energy_error_first_hour": error[run["t_s"] <= 3600.0].max(),
+            "energy_error_end": abs(finite["energy_rel_error"].iloc[-1]) if not finite.empty else np.nan,
+            "end_s": finite["t_s"].iloc[-1] if not finite.empty else np.nan,
+            "message": run["message"].iloc[0],
+        })
+    return pd.DataFrame(rows)
+
+
+def stability_summary(stability: pd.DataFrame) -> pd.DataFrame:
+    """Per integrator of the stability sweep: declared limit, the first k·h whose run diverged (the fixed-step
+    loop's criterion: non-finite, or farther than 1000 L from the vertical within the sweep's steps) and the
+    largest k·h below it."""
+    rows = []
+    for integrator, sweep in stability.groupby("integrator", sort=True):
+        sweep = sweep.sort_values("kh")
+        diverged = sweep.loc[sweep["status"] == STATUS_DIVERGED, "kh"]
+        first = diverged.min() if not diverged.empty else np.nan
+        below = sweep.loc[sweep["kh"] < first, "kh"] if not diverged.empty else sweep["kh"]
+        rows.append({
+            "integrator": integrator, "family": sweep["family"].iloc[0],
+            "stability_limit_kh": sweep["stability_limit_kh"].iloc[0],
+            "largest_kh_not_diverged": below.max() if not below.empty else np.nan,
+            "first_diverged_kh": first,
+            **_status_counts(sweep),
+        })
+    return pd.DataFrame(rows)

@@ -1,0 +1,257 @@
+"""Every adaptive integrator on every model: runs, accuracy against the real128 reference, counters, turning
+points, failures and settings.
+
+Scene: the Panthéon pendulum (L = 67 m, φ = 48.846°, A = 3 m) for 120 s (7 swings, 14 turning points), output
+every second. Errors are max over the grid of |Δy_i| / scale_i with scale = (A, A, kA, kA). Thresholds and the
+measurements behind them (this machine, tol = 1e-10 unless said):
+
+* error shrinks by ≥ 100× from tol = 1e-6 to 1e-10 (tolerance proportionality would give 1e4; the multistep and
+  Taylor controllers are not proportional; smallest measured ratio 1.75e3, cvode_adams on the spherical model);
+* error ≤ 1e4 × tol at tol = 1e-10: the tolerance bounds the local error per step, the global error adds up over
+  the steps (largest measured 1.7e3 × tol, cvode_bdf on the linear model: a margin of 5.9);
+* turning points: times within (10 × error + 1e-13)/k and positions within (10 × error + 1e-13)·A of the
+  reference; measured ≤ 1.0 × error where the error is above round-off, and ≤ 2e-14 where it is not
+  (1e-13: double round-off of an event time near t = 100 s, k·t·ε ≈ 1e-14, with a margin of 10).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import sys
+
+import numpy as np
+import pytest
+
+from integrators import REGISTRY, Problem, Solution, get_integrator
+from integrators.adaptive import state_scale
+from integrators.cvode import CvodeAdams, CvodeBdf, CvodeIntegrator
+from integrators.heyoka_taylor import REFERENCE_TOLERANCE, HeyokaTaylor, HeyokaTaylorQuad, _compiled_template
+from integrators.scipy_ivp import ScipyDop853, ScipyLsoda, ScipyRk45
+from models import MODELS, Model, PendulumParameters
+from models.analytic import linear_exact, textbook_turning_azimuth
+from models.parameters import P_K2, P_LENGTH
+
+ADAPTIVE = sorted(name for name, integrator in REGISTRY.items() if integrator.adaptive)
+SCENE = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
+T_OUT = np.linspace(0.0, 120.0, 121)
+LOOSE, TIGHT = 1.0e-6, 1.0e-10
+SHRINK_FACTOR = 100.0
+GLOBAL_OVER_LOCAL = 1.0e4
+TURNING_POINT_MARGIN, ROUND_OFF_FLOOR = 10.0, 1.0e-13
+RHS_CALLS_PER_STEP_AT_LEAST = {"scipy_rk45": 6, "scipy_dop853": 12}
+"""New right-hand-side calls per accepted step of the explicit Runge-Kutta pairs (first-same-as-last)."""
+
+INTEGRATOR_CLASSES = {cls.name: cls for cls in (CvodeAdams, CvodeBdf, HeyokaTaylor, HeyokaTaylorQuad, ScipyDop853,
+                                                 ScipyRk45, ScipyLsoda)}
+
+
+@functools.cache
+def run(name: str, model_name: str, tol: float) -> Solution:
+    return get_integrator(name).solve(Problem(MODELS[model_name], SCENE, T_OUT), tol=tol)
+
+
+@functools.cache
+def reference(model_name: str) -> Solution:
+    solution = run("heyoka_taylor_quad", model_name, REFERENCE_TOLERANCE)
+    assert solution.status == "ok", solution.message
+    return solution
+
+
+def scaled_error(solution: Solution, model_name: str) -> float:
+    return float(np.max(np.abs(solution.y - reference(model_name).y) / state_scale(SCENE)))
+
+
+def test_every_adaptive_family_is_registered() -> None:
+    assert set(ADAPTIVE) == set(INTEGRATOR_CLASSES)
+
+
+@pytest.mark.parametrize("name", ADAPTIVE)
+def test_declares_its_facts(name: str) -> None:
+    integrator = get_integrator(name)
+    assert integrator.adaptive is True and integrator.stages is None
+    assert integrator.order is None or (isinstance(integrator.order, int) and integrator.order > 0)
+    assert integrator.family and integrator.reference
+    documentation = ((type(integrator).__doc__ or "") + (sys.modules[type(integrator).__module__].__doc__ or ""))
+    for fact in ("order", "stab", "tolerance"):  # order, stability notes, tolerance mapping
+        assert fact in documentation.lower(), fact
+
+
+@pytest.mark.parametrize("model_name", MODELS)
+@pytest.mark.parametrize("name", ADAPTIVE)
+def test_runs_with_consistent_counters(name: str, model_name: str) -> None:
+    solution = run(name, model_name, TIGHT)
+    assert solution.status == "ok" and solution.message == "", solution.message
+    assert np.all(np.isfinite(solution.y))
+    np.testing.assert_allclose(solution.y[0], SCENE.initial_state(), rtol=0, atol=1e-15 * SCENE.amplitude_m)
+    assert solution.tolerance == TIGHT
+    assert isinstance(solution.nfev, int) and solution.nfev > 0
+    assert solution.njev is None or solution.njev >= 0
+    assert solution.rejected_steps is None or solution.rejected_steps >= 0
+    if solution.steps is not None:
+        assert 0 < solution.steps <= solution.nfev
+        assert solution.nfev >= RHS_CALLS_PER_STEP_AT_LEAST.get(name, 1) * solution.steps
+    family = type(get_integrator(name))
+    if issubclass(family, HeyokaTaylor):  # one Taylor expansion per step, never rejected
+        assert solution.nfev == solution.steps and solution.rejected_steps == 0
+    if issubclass(family, CvodeIntegrator):  # Newton iteration with the analytic Jacobian
+        assert 1 <= solution.njev < solution.nfev
+
+
+@pytest.mark.parametrize("model_name", MODELS)
+@pytest.mark.parametrize("name", ADAPTIVE)
+def test_error_against_the_reference_shrinks_with_the_tolerance(name: str, model_name: str) -> None:
+    loose = scaled_error(run(name, model_name, LOOSE), model_name)
+    tight = scaled_error(run(name, model_name, TIGHT), model_name)
+    assert tight <= loose / SHRINK_FACTOR, (loose, tight)
+    assert tight <= GLOBAL_OVER_LOCAL * TIGHT
+
+
+@pytest.mark.parametrize("model_name", MODELS)
+@pytest.mark.parametrize("name", ADAPTIVE)
+def test_turning_points_match_the_reference(name: str, model_name: str) -> None:
+    solution = run(name, model_name, TIGHT)
+    expected = reference(model_name).streamed.turning_points
+    found = solution.streamed.turning_points
+    assert found.shape == expected.shape == (14, 3)
+    assert np.all(found[:, 0] > 0.0) and np.all(np.diff(found[:, 0]) > 0.0)
+    bound = TURNING_POINT_MARGIN * scaled_error(solution, model_name) + ROUND_OFF_FLOOR
+    k = SCENE.pendulum_frequency_rad_s
+    assert np.max(np.abs(found[:, 0] - expected[:, 0])) * k <= bound
+    assert np.max(np.abs(found[:, 1:] - expected[:, 1:])) / SCENE.amplitude_m <= bound
+
+
+@pytest.mark.parametrize("name", ADAPTIVE)
+def test_linear_turning_points_lie_on_the_textbook_azimuth(name: str) -> None:
+    """Exact linear solution: turning points at t_n = nπ/Ω on azimuth ψ₀ − a t_n (mod π), PHYSICS.md."""
+    solution = run(name, "linear", TIGHT)
+    found = solution.streamed.turning_points
+    big_omega = math.sqrt(SCENE.gravity_m_s2 / SCENE.length_m + SCENE.vertical_rate_rad_s**2)
+    n = np.arange(1, found.shape[0] + 1)
+    assert found.shape[0] == math.floor(T_OUT[-1] * big_omega / math.pi)
+    error = float(np.max(np.abs(solution.y - linear_exact(SCENE, T_OUT)) / state_scale(SCENE)))
+    bound = TURNING_POINT_MARGIN * error + ROUND_OFF_FLOOR
+    assert np.max(np.abs(found[:, 0] - n * math.pi / big_omega)) * big_omega <= bound
+    azimuth = np.arctan2(found[:, 2], found[:, 1])
+    offset = (azimuth - textbook_turning_azimuth(SCENE, found[:, 0]) + math.pi / 2) % math.pi - math.pi / 2
+    assert np.max(np.abs(offset)) <= bound
+
+
+@pytest.mark.parametrize("name", ADAPTIVE)
+def test_output_grid_may_start_after_the_release(name: str) -> None:
+    """Two output times, the first after t = 0: CVODE gets a midpoint, heyoka propagates to t_out[0] first."""
+    t_out = np.array([5.0, 120.0])
+    solution = get_integrator(name).solve(Problem(MODELS["linear"], SCENE, t_out), tol=TIGHT)
+    assert solution.status == "ok", solution.message
+    assert solution.y.shape == (2, 4)
+    error = np.max(np.abs(solution.y - linear_exact(SCENE, t_out)) / state_scale(SCENE))
+    assert error <= GLOBAL_OVER_LOCAL * TIGHT
+
+
+@pytest.mark.parametrize("name", ADAPTIVE)
+def test_runs_are_deterministic(name: str) -> None:
+    first = run(name, "spherical", TIGHT)
+    again = get_integrator(name).solve(Problem(MODELS["spherical"], SCENE, T_OUT), tol=TIGHT)
+    np.testing.assert_array_equal(again.y, first.y)
+    np.testing.assert_array_equal(again.streamed.turning_points, first.streamed.turning_points)
+    assert (again.nfev, again.njev, again.steps) == (first.nfev, first.njev, first.steps)
+
+
+@pytest.mark.parametrize("name", ADAPTIVE)
+@pytest.mark.parametrize("bad", [None, 0.0, -1e-8, 1.0, 2.0, float("nan"), "1e-8"])
+def test_bad_tolerance_raises(name: str, bad) -> None:
+    with pytest.raises(ValueError):
+        get_integrator(name).solve(Problem(MODELS["linear"], SCENE, T_OUT), tol=bad)
+
+
+@pytest.mark.parametrize("name", ADAPTIVE)
+def test_step_size_is_refused(name: str) -> None:
+    with pytest.raises(ValueError, match="adaptive"):
+        get_integrator(name).solve(Problem(MODELS["linear"], SCENE, T_OUT), step_s=0.01, tol=TIGHT)
+
+
+@pytest.mark.parametrize("name", ["scipy_dop853", "scipy_rk45", "scipy_lsoda"])
+def test_scipy_refuses_tolerances_it_would_silently_raise(name: str) -> None:
+    with pytest.raises(ValueError, match="floor"):
+        get_integrator(name).solve(Problem(MODELS["linear"], SCENE, T_OUT), tol=1e-15)
+
+
+# --- failures -----------------------------------------------------------------------------------------------
+
+def blow_up_force(m, x, y, z, vx, vy, vz, p):
+    """ÿ = k²y²/L, ẍ = 0: from y(0) = A at rest, y reaches infinity at t* = 2.4286·√(3L/(2k²A))
+    (energy ½ẏ² = k²(y³ − A³)/(3L); ∫₁^∞ du/√(u³ − 1) = 2.4286). No integrator can pass t*."""
+    return 0.0 * x, p[P_K2] * y * y / p[P_LENGTH], 0.0 * z
+
+
+def blow_up_energy(m, x, y, vx, vy, p):
+    return 0.5 * (vx * vx + vy * vy) - p[P_K2] * y * y * y / (3.0 * p[P_LENGTH])
+
+
+BLOW_UP = Model(name="test_blow_up", title="finite-time blow-up (test only)", geometry="plane",
+                free_force=blow_up_force, energy=blow_up_energy, energy_name="½|v|² − k²y³/3L",
+                conserves_energy=True, hamiltonian=False)
+BLOW_UP_SCENE = PendulumParameters(length_m=1.0, latitude_deg=45.0, amplitude_m=0.5)
+BLOW_UP_TIME_S = 2.4286 * math.sqrt(3.0 / (2.0 * 9.81 * 0.5))  # 1.343 s
+
+
+@pytest.mark.parametrize("name", ADAPTIVE)
+def test_impossible_problem_returns_a_failed_row_without_raising(name: str) -> None:
+    t_out = np.linspace(0.0, 3.0, 31)
+    solution = get_integrator(name).solve(Problem(BLOW_UP, BLOW_UP_SCENE, t_out), tol=1e-8)
+    assert solution.status in ("failed", "diverged")
+    assert solution.message
+    assert np.all(np.isfinite(solution.y[t_out < BLOW_UP_TIME_S - 0.05]))
+    assert np.all(np.isnan(solution.y[t_out > BLOW_UP_TIME_S + 0.05]))
+
+
+@pytest.mark.parametrize(("name", "option"), [
+    ("cvode_adams", "max_num_steps"), ("cvode_bdf", "max_num_steps"), ("heyoka_taylor", "max_steps"),
+    ("heyoka_taylor_quad", "max_steps"), ("scipy_dop853", "max_steps"), ("scipy_rk45", "max_steps"),
+    ("scipy_lsoda", "max_steps"),
+])
+def test_step_limit_gives_a_failed_row_with_the_library_message(name: str, option: str) -> None:
+    integrator = INTEGRATOR_CLASSES[name](**{option: 10})
+    solution = integrator.solve(Problem(MODELS["spherical"], SCENE, T_OUT), tol=TIGHT)
+    assert solution.status == "failed"
+    assert any(word in solution.message for word in ("max_num_steps", "step_limit", "step limit")), solution.message
+    assert np.all(np.isfinite(solution.y[0])) and np.all(np.isnan(solution.y[-1]))
+
+
+@pytest.mark.parametrize("cls", [CvodeAdams, CvodeBdf, HeyokaTaylor, ScipyRk45])
+def test_non_positive_step_limits_are_refused(cls: type) -> None:
+    option = "max_num_steps" if issubclass(cls, CvodeIntegrator) else "max_steps"
+    with pytest.raises(ValueError):
+        cls(**{option: 0})
+
+
+def test_sundials_messages_do_not_reach_the_terminal(capfd: pytest.CaptureFixture) -> None:
+    problem = Problem(MODELS["linear"], SCENE, T_OUT)
+    integrator = CvodeAdams(max_num_steps=10)
+    integrator._solve(problem, step_s=None, tol=TIGHT, monitor=False)  # unsilenced: SUNDIALS writes to stderr
+    captured = capfd.readouterr()
+    assert "CVode" in captured.out + captured.err
+    solution = integrator.solve(problem, tol=TIGHT)
+    assert solution.status == "failed"
+    captured = capfd.readouterr()
+    assert captured.out + captured.err == ""
+
+
+@pytest.mark.parametrize("cls", [CvodeAdams, CvodeBdf])
+def test_cvode_runs_with_its_difference_quotient_jacobian(cls: type) -> None:
+    solution = cls(analytic_jacobian=False).solve(Problem(MODELS["spherical"], SCENE, T_OUT), tol=TIGHT)
+    assert solution.status == "ok", solution.message
+    assert solution.njev >= 1 and solution.nfev > 4 * solution.njev
+    assert scaled_error(solution, "spherical") <= GLOBAL_OVER_LOCAL * TIGHT
+
+
+def test_heyoka_reuses_its_compiled_integrator_without_changing_it() -> None:
+    problem = Problem(MODELS["seed_planar"], SCENE, T_OUT)
+    get_integrator("heyoka_taylor").solve(problem, tol=3e-9)
+    hits = _compiled_template.cache_info().hits
+    again = get_integrator("heyoka_taylor").solve(problem, tol=3e-9)
+    assert _compiled_template.cache_info().hits == hits + 1
+    assert again.status == "ok"
+    template = _compiled_template(MODELS["seed_planar"], "double", 3e-9, True)
+    assert float(template.time) == 0.0 and not np.any(template.state)
+    assert template.nt_events[0].callback.rows == []

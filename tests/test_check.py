@@ -1,0 +1,309 @@
+"""Tests of the CI gate ``foucault-bench check`` (bench/check.py) and its shipped thresholds.
+
+What they prove:
+
+* the shipped ``default`` thresholds hold on a fresh run of the ``quick`` matrix (exit 0), and the JUnit report
+  carries one test case per checked line;
+* the gate can fail: two wrong integrators (``tests/check_mutants.py``: RK4 with a wrong weight, Verlet with the
+  naive explicit Coriolis kick), held to the shipped bounds of the integrators they imitate, make ``check`` exit 1
+  and name the violated bounds;
+* bad input (unknown integrator, scene or column, malformed TOML, a bound that selects no row, a wall-time bound
+  that is not a ratio) exits 2 with a clear message before any matrix runs;
+* the evaluation rules (ratio bounds, runs that are not ok, margins) on small hand-made tables.
+
+One matrix run serves the module (the quick matrix with the mutants added, through the real runner and its
+worker processes; the mutants reach the workers as a matrix plug-in). Nothing here measures or bounds
+wall-clock time: the ratio test uses made-up numbers.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import re
+import sys
+import tomllib
+import xml.etree.ElementTree as ElementTree
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from bench.check import (
+    ERROR_COLUMNS,
+    evaluate,
+    headroom,
+    load_thresholds,
+    parse_thresholds,
+    render,
+    validate_against,
+)
+from bench.cli import main
+from bench.errors import InputError
+from bench.schema import COLUMN_NAMES
+from integrators import REGISTRY, unregister
+
+TESTS = Path(__file__).resolve().parent
+ROOT = TESTS.parent
+QUICK_MATRIX = ROOT / "bench" / "matrices" / "quick.toml"
+DEFAULT_THRESHOLDS = ROOT / "bench" / "thresholds" / "default.toml"
+MUTANT_PLUGIN = "check_mutants"
+MUTANT_OF = {"rk4": "rk4_wrong_weights", "verlet": "verlet_naive_coriolis"}
+JOBS = "2"
+
+
+def run_cli(argv: list[str]) -> tuple[int, str]:
+    """``foucault-bench ARGV`` in this process: (exit status, stdout)."""
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        status = main(argv)
+    return status, out.getvalue()
+
+
+def write_toml_lines(path: Path, lines: list[str]) -> Path:
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def toml_value(value) -> str:
+    """A TOML literal for the plain values used in these files (str, number, bool, list of those)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, list):
+        return "[" + ", ".join(toml_value(item) for item in value) + "]"
+    return repr(value)
+
+
+def junit_cases(path: Path) -> list[ElementTree.Element]:
+    return list(ElementTree.parse(path).getroot().iter("testcase"))
+
+
+# --- one matrix run: the quick matrix plus two wrong integrators ----------------------------------------------------
+
+
+def toml_text(document: dict) -> str:
+    """A matrix or thresholds document as TOML: top-level values, then tables ([timing]), tables of tables
+    ([scene.NAME]) and arrays of tables ([[bound]]); enough for the files used here."""
+    lines = [f"{key} = {toml_value(value)}" for key, value in document.items()
+             if not isinstance(value, dict) and not (isinstance(value, list) and value and isinstance(value[0], dict))]
+    for key, value in document.items():
+        if isinstance(value, dict) and all(isinstance(inner, dict) for inner in value.values()):
+            for name, table in value.items():
+                lines += [f"[{key}.{name}]"] + [f"{field} = {toml_value(item)}" for field, item in table.items()]
+        elif isinstance(value, dict):
+            lines += [f"[{key}]"] + [f"{field} = {toml_value(item)}" for field, item in value.items()]
+        elif isinstance(value, list) and value and isinstance(value[0], dict):
+            for table in value:
+                lines += [f"[[{key}]]"] + [f"{field} = {toml_value(item)}" for field, item in table.items()]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.fixture(scope="module")
+def gate_run(tmp_path_factory) -> dict:
+    """``check --thresholds default`` on one fresh matrix run: the quick matrix with the two mutants of
+    tests/check_mutants.py added on the same scenes and steps (the quick integrators' rows are those of the quick
+    matrix; the shipped bounds do not select the mutants). The mutants reach the spawned workers as a matrix
+    plug-in (the workers inherit sys.path) and leave the registry when the module's tests are done."""
+    directory = tmp_path_factory.mktemp("gate")
+    quick = tomllib.loads(QUICK_MATRIX.read_text(encoding="utf-8"))
+    matrix = {**quick, "name": "quick_and_mutants", "integrators": [*quick["integrators"], *MUTANT_OF.values()],
+              "plugins": [*quick.get("plugins", []), MUTANT_PLUGIN]}
+    matrix_path = directory / "quick_and_mutants.toml"
+    matrix_path.write_text(toml_text(matrix), encoding="utf-8")
+    db, junit = directory / "gate.sqlite", directory / "junit.xml"
+    with pytest.MonkeyPatch.context() as patch:
+        patch.syspath_prepend(str(TESTS))
+        status, stdout = run_cli(["check", "--thresholds", "default", "--matrix", str(matrix_path), "--db", str(db),
+                                  "--junit", str(junit), "--jobs", JOBS, "--no-progress"])
+    yield {"status": status, "stdout": stdout, "db": db, "junit": junit, "directory": directory}
+    for name in MUTANT_OF.values():
+        unregister(name)
+    sys.modules.pop(MUTANT_PLUGIN, None)
+
+
+def test_default_thresholds_hold_on_the_quick_matrix(gate_run):
+    assert gate_run["status"] == 0, gate_run["stdout"]
+    assert "FAIL" not in gate_run["stdout"]
+    assert re.search(r"(\d+) checks: \1 passed, 0 failed", gate_run["stdout"])
+
+
+def test_junit_report_has_one_case_per_check(gate_run):
+    thresholds = load_thresholds("default")
+    cases = junit_cases(gate_run["junit"])
+    root = ElementTree.parse(gate_run["junit"]).getroot()
+    assert int(root.get("tests")) == len(cases) and int(root.get("failures")) == 0
+    numbers = {int(re.match(r"#(\d+) ", case.get("name")).group(1)) for case in cases}
+    assert numbers == {bound.number for bound in thresholds.bounds}  # every bound was checked on some row
+    assert not any(case.find("failure") is not None for case in cases)
+
+
+def test_stored_results_give_the_same_verdict(gate_run):
+    """--results reads the database the --matrix run kept; --format markdown gives a GitHub table."""
+    status, stdout = run_cli(["check", "--thresholds", "default", "--results", str(gate_run["db"]),
+                              "--format", "markdown"])
+    assert status == 0
+    assert stdout.splitlines()[0].startswith("| #")
+    assert stdout.count("| pass") == len(junit_cases(gate_run["junit"]))
+
+
+def test_shipped_bounds_state_their_basis():
+    for bound in load_thresholds("default").bounds:
+        assert bound.basis.startswith(("theory: ", "measured: ")), f"bound #{bound.number} has no basis"
+
+
+def test_wrong_integrators_fail_the_shipped_bounds(gate_run):
+    """The shipped bounds of rk4 and verlet, retargeted to their mutants, fail on the mutants' rows."""
+    shipped = tomllib.loads(DEFAULT_THRESHOLDS.read_text(encoding="utf-8"))
+    retargeted = [{**table, "integrator": MUTANT_OF[table["integrator"]]} for table in shipped["bound"]
+                  if table.get("integrator") in MUTANT_OF]
+    thresholds = gate_run["directory"] / "mutants.toml"
+    thresholds.write_text(toml_text({"bound": retargeted}), encoding="utf-8")
+    junit = gate_run["directory"] / "mutants_junit.xml"
+    status, stdout = run_cli(["check", "--thresholds", str(thresholds), "--results", str(gate_run["db"]),
+                              "--junit", str(junit)])
+    assert status == 1, stdout
+    failed = [(case.get("classname"), case.get("name")) for case in junit_cases(junit)
+              if case.find("failure") is not None]
+    # Weights (1, 3, 1, 1)/6 make a second-order method (tests/check_mutants.py): both order fits fall below 3.5.
+    for scene in ("seed_2min", "lab_3m_2min"):
+        for column in ("reference_error", "precession_rate_ref_error"):
+            assert any(classname == f"check.{scene}.rk4_wrong_weights" and name.endswith(f"order of {column} >= 3.5")
+                       for classname, name in failed), (scene, column, failed)
+    # The explicit Coriolis kick opens the swing into an ellipse, which the spherical model turns into a fake
+    # Airy precession (PHYSICS.md "Verlet with a Coriolis force").
+    assert any(classname == "check.lab_3m_2min.verlet_naive_coriolis" and "precession_rate_ref_error" in name
+               for classname, name in failed)
+    assert re.search(r"bound #\d+ lab_3m_2min verlet_naive_coriolis \S+: precession_rate_ref_error <= \S+ "
+                     r"violated, measured", stdout)
+    assert f"{len(failed)} failed" in stdout
+
+
+# --- bad input: exit 2 before anything runs ------------------------------------------------------------------------
+
+
+BAD_BOUNDS = {
+    "unknown integrator": (['integrator = "rk5"', 'column = "reference_error"', "max = 1e-6"],
+                           "unknown integrator 'rk5' (did you mean 'rk4'?)"),
+    "unknown scene": (['scene = "pantheonn"', 'integrator = "rk4"', 'column = "reference_error"', "max = 1e-6"],
+                      "unknown scene 'pantheonn' (did you mean 'pantheon'?)"),
+    "unknown column": (['integrator = "rk4"', 'column = "reference_eror"', "max = 1e-6"],
+                       "unknown column 'reference_eror' (did you mean 'reference_error'?)"),
+    "no matching row": (['integrator = "rk4"', "kh = 0.3", 'column = "reference_error"', "max = 1e-6"],
+                        "matches no row of matrix 'quick'"),
+    "built-in scene not in the matrix": (['scene = "pantheon"', 'integrator = "rk4"', 'column = "nfev"', "max = 1"],
+                                         "scene 'pantheon' has no rows in matrix 'quick'"),
+    "absolute wall time": (['integrator = "rk4"', 'column = "wall_time_s"', "max = 1.0"],
+                           "bound it only as max_ratio"),
+    "order of an adaptive method": (['integrator = "cvode_bdf"', 'column = "reference_error"', "min_order = 4"],
+                                    "cvode_bdf is adaptive"),
+    "two kinds": (['integrator = "rk4"', 'column = "reference_error"', "max = 1e-6", "min = 1e-9"],
+                  "give exactly one kind of bound"),
+    "unknown key": (['integrator = "rk4"', 'column = "reference_error"', "maximum = 1e-6"],
+                    "unknown key 'maximum'"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_BOUNDS))
+def test_bad_thresholds_exit_2_with_a_clear_message(case, tmp_path, capsys):
+    lines, message = BAD_BOUNDS[case]
+    if not any(line.startswith("scene") for line in lines):
+        lines = ['scene = "seed_2min"', *lines]
+    thresholds = write_toml_lines(tmp_path / "bad.toml", ["[[bound]]", *lines])
+    status = main(["check", "--thresholds", str(thresholds), "--matrix", "quick", "--no-progress"])
+    assert status == 2
+    errors = capsys.readouterr().err
+    assert message in errors, errors
+    assert "Traceback" not in errors
+
+
+def test_malformed_toml_exits_2(tmp_path, capsys):
+    thresholds = write_toml_lines(tmp_path / "broken.toml", ["[[bound]]", 'scene = "seed_2min'])
+    assert main(["check", "--thresholds", str(thresholds), "--matrix", "quick"]) == 2
+    assert "not valid TOML" in capsys.readouterr().err
+
+
+def test_documented_example_is_a_valid_thresholds_file():
+    """The complete example of the README section (docs_check_section.md until the lead merges it into
+    README.md) parses and names only real scenes, integrators and columns."""
+    texts = [path.read_text(encoding="utf-8") for path in (ROOT / "README.md", ROOT / "docs_check_section.md")
+             if path.exists()]
+    examples = [block for text in texts for block in re.findall(r"```toml\n(# thresholds example.*?)```", text, re.S)]
+    assert examples, "the README's complete thresholds example is missing"
+    thresholds = parse_thresholds(tomllib.loads(examples[0]), source="README example")
+    from bench.scenes import SCENES
+
+    for bound in thresholds.bounds:
+        assert set(bound.selection.scenes) <= set(SCENES)
+        assert set(bound.selection.integrators) <= set(REGISTRY)
+
+
+# --- evaluation rules on hand-made rows -----------------------------------------------------------------------------
+
+
+def made_up_row(**values) -> dict:
+    """One results row with every column, NULL unless given."""
+    row = dict.fromkeys(COLUMN_NAMES)
+    row.update(scene="lab", family="runge-kutta", status="ok", message="", duration_s=10.0, n_out=11)
+    row.update(values)
+    return row
+
+
+def made_up_thresholds(*bounds: dict):
+    return parse_thresholds({"bound": [{"scene": "lab", **bound} for bound in bounds]}, source="test")
+
+
+def test_ratio_bound_divides_by_the_other_integrator_of_the_same_run():
+    frame = pd.DataFrame([
+        made_up_row(integrator="fast", kh=0.1, step_s=0.1, wall_time_s=1.0),
+        made_up_row(integrator="slow", kh=0.1, step_s=0.1, wall_time_s=3.0),
+    ])
+    thresholds = made_up_thresholds(
+        {"integrator": "slow", "column": "wall_time_s", "max_ratio": 2.0, "relative_to": "fast"},
+        {"integrator": "slow", "column": "wall_time_s", "max_ratio": 4.0, "relative_to": {"integrator": "fast",
+                                                                                           "kh": 0.1}},
+    )
+    validate_against(thresholds, frame, what="made-up rows")
+    failing, passing = evaluate(thresholds, frame)
+    assert failing.measured == pytest.approx(3.0) and not failing.passed
+    assert passing.passed and passing.margin == pytest.approx(4.0 / 3.0)
+
+
+def test_ratio_bound_without_a_counterpart_row_is_bad_input():
+    frame = pd.DataFrame([made_up_row(integrator="fast", kh=0.1, step_s=0.1, wall_time_s=1.0),
+                          made_up_row(integrator="slow", kh=0.2, step_s=0.2, wall_time_s=3.0)])
+    thresholds = made_up_thresholds(
+        {"integrator": "slow", "column": "wall_time_s", "max_ratio": 2.0, "relative_to": "fast"})
+    with pytest.raises(InputError, match="fast has no row to compare with at lab kh=0.2"):
+        validate_against(thresholds, frame, what="made-up rows")
+
+
+def test_a_run_that_is_not_ok_fails_value_bounds_and_says_why():
+    frame = pd.DataFrame([made_up_row(integrator="rk4", kh=0.1, step_s=0.1, status="diverged",
+                                      message="diverged after 3 steps", reference_error=1e-9)])
+    outcomes = evaluate(made_up_thresholds({"integrator": "rk4", "column": "reference_error", "max": 1.0},
+                                           {"integrator": "rk4", "status": "ok"}), frame)
+    assert [outcome.passed for outcome in outcomes] == [False, False]
+    assert "diverged after 3 steps" in outcomes[0].detail
+    assert "FAIL" in render(outcomes, markdown=False)
+
+
+def test_missing_value_fails_and_margins_follow_the_bound_direction():
+    frame = pd.DataFrame([made_up_row(integrator="rk4", kh=0.1, step_s=0.1, reference_error=None,
+                                      energy_drift_per_s=-2e-9)])
+    missing, drift, signed = evaluate(made_up_thresholds(
+        {"integrator": "rk4", "column": "reference_error", "max": 1.0},
+        {"integrator": "rk4", "column": "energy_drift_per_s", "max_abs": 1e-9},
+        {"integrator": "rk4", "column": "energy_drift_per_s", "min": -1e-9}), frame)
+    assert not missing.passed and math.isnan(missing.measured)
+    assert not drift.passed and drift.margin == pytest.approx(0.5)
+    assert not signed.passed and signed.margin == pytest.approx(-1e-9)  # a difference: the value is negative
+    assert headroom("min", 4.0, 3.5) == (pytest.approx(4.0 / 3.5), True)
+
+
+def test_order_is_fitted_on_error_columns_only():
+    with pytest.raises(InputError, match="cannot take a min_order bound"):
+        made_up_thresholds({"integrator": "rk4", "column": "energy_drift_per_s", "min_order": 4})
+    assert "energy_drift_per_s" not in ERROR_COLUMNS

@@ -1,0 +1,86 @@
+"""The two compiled forms of each model agree: numba's right-hand side and heyoka's expressions (both built
+from the model's one source, models/base.py), and heyoka's symbolic Jacobian matches the numba right-hand side.
+
+Samples: 1,200 random states per model, positions uniform in a disc of radius L/2 (well inside the sphere),
+velocities uniform in a square of half-side k·L/2 (the pendulum's speed scale), parameters drawn from several
+latitudes (both hemispheres, equator, poles), two lengths, centrifugal on and off, and both Earth's rate and a
+fast rotation (Ω = 0.2 k) that makes every rotation term of order one, so a wrong sign or factor in any term
+shows far above round-off.
+"""
+
+from __future__ import annotations
+
+import heyoka
+import numpy as np
+import pytest
+
+from models import MODELS, Model, PendulumParameters
+from models.parameters import P_K2, P_LENGTH
+
+N_SAMPLES = 1200
+LATITUDES_DEG = (-90.0, -48.846, -10.0, 0.0, 30.0, 48.846, 90.0)
+LENGTHS_M = (3.0, 67.0)
+RHS_AGREEMENT = 1.0e-14
+"""Relative to each component's scale (max |component| over the sample): a few ulps of reordered arithmetic."""
+
+
+def random_sample(seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """States (N, 4) and parameter vectors (N, 7) drawn as in the module docstring."""
+    rng = np.random.default_rng(seed)
+    states = np.empty((N_SAMPLES, 4))
+    pars = np.empty((N_SAMPLES, 7))
+    for i in range(N_SAMPLES):
+        length = LENGTHS_M[rng.integers(len(LENGTHS_M))]
+        k = np.sqrt(9.81 / length)
+        fast = rng.random() < 0.5
+        params = PendulumParameters(
+            length_m=length,
+            latitude_deg=LATITUDES_DEG[rng.integers(len(LATITUDES_DEG))],
+            amplitude_m=0.5 * length,
+            earth_rate_rad_s=0.2 * k if fast else 7.2921159e-5,
+            centrifugal=bool(rng.random() < 0.5),
+        )
+        radius = 0.5 * length * np.sqrt(rng.random())
+        angle = 2.0 * np.pi * rng.random()
+        states[i] = (radius * np.cos(angle), radius * np.sin(angle), *(0.5 * k * length * rng.uniform(-1, 1, 2)))
+        pars[i] = params.parameter_vector()
+    return states, pars
+
+
+def heyoka_rhs(model: Model):
+    system = model.heyoka_system()
+    return heyoka.cfunc([rhs for _, rhs in system], vars=[variable for variable, _ in system])
+
+
+@pytest.mark.parametrize("model", MODELS.values(), ids=MODELS.keys())
+def test_numba_and_heyoka_right_hand_sides_agree(model: Model) -> None:
+    states, pars = random_sample(seed=1)
+    numba_values = np.array([model.numba_rhs(0.0, state, p) for state, p in zip(states, pars)])
+    heyoka_values = heyoka_rhs(model)(states.T.copy(), pars=pars[:, : model.heyoka_parameter_count].T.copy()).T
+    scale = np.max(np.abs(numba_values), axis=0)
+    assert np.all(scale > 0.0)
+    worst = np.max(np.abs(heyoka_values - numba_values) / scale, axis=0)
+    assert np.all(worst <= RHS_AGREEMENT), f"relative disagreement per component {worst}"
+
+
+@pytest.mark.parametrize("model", MODELS.values(), ids=MODELS.keys())
+def test_symbolic_jacobian_matches_central_differences_of_the_numba_rhs(model: Model) -> None:
+    """∂f/∂y_j from ``Model.jacobian_into`` vs the 4th-order central difference of the numba RHS with step
+    δ = 1e-3 × (L, L, kL, kL) of each sample: the state varies on the scales L and kL, so the truncation is
+    ~(δ/L)⁴ ≈ 1e-12 and the round-off ~ε/1e-3 ≈ 2e-13 of the scale; agreement to 1e-9 of each column's scale
+    leaves a margin of 1000 and still catches any wrong term (the rotation terms are O(1) in the fast samples)."""
+    states, pars = random_sample(seed=2)
+    weights = {-2: 1.0 / 12.0, -1: -8.0 / 12.0, 1: 8.0 / 12.0, 2: -1.0 / 12.0}
+    worst = 0.0
+    analytic = np.empty((4, 4))
+    for state, p in zip(states[:200], pars[:200]):
+        length, k = p[P_LENGTH], np.sqrt(p[P_K2])
+        step = 1.0e-3 * np.array([length, length, k * length, k * length])
+        model.jacobian_into(0.0, state, analytic, p)
+        numeric = np.empty((4, 4))
+        for j in range(4):
+            shifted = [model.numba_rhs(0.0, state + m * step[j] * np.eye(4)[j], p) for m in weights]
+            numeric[:, j] = sum(w * f for w, f in zip(weights.values(), shifted)) / step[j]
+        column_scale = np.maximum(np.max(np.abs(numeric), axis=0), 1e-300)
+        worst = max(worst, float(np.max(np.abs(analytic - numeric) / column_scale)))
+    assert worst <= 1.0e-9

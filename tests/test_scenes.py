@@ -1,0 +1,167 @@
+"""Scenes (built-in and inline) and the reference cache."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import bench.reference as reference_module
+from bench.errors import InputError
+from bench.reference import CACHE_ENVIRONMENT_VARIABLE, cache_directory, load_cached, reference_for, reference_key
+from bench.scenes import MIN_OUTPUT_INTERVALS_PER_PERIOD, SCENES, scene_from_mapping
+from models import MODELS
+
+REAL_PENDULUMS = ("pantheon", "un_headquarters", "griffith", "south_pole", "lab_3m")
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv(CACHE_ENVIRONMENT_VARIABLE, str(tmp_path))
+    return tmp_path
+
+
+def problems_of(name: str, mapping: dict) -> list[str]:
+    with pytest.raises(InputError) as error:
+        scene_from_mapping(name, mapping)
+    return error.value.problems
+
+
+# --- built-in scenes --------------------------------------------------------------------------------------------
+
+
+def test_the_built_in_scenes_are_the_ones_promised() -> None:
+    assert set(REAL_PENDULUMS) | {"airy_3m", "seed_2min"} == set(SCENES)
+    assert SCENES["seed_2min"].model == "linear" and SCENES["airy_3m"].model == "spherical"
+    assert SCENES["seed_2min"].params.earth_rate_rad_s == pytest.approx(2 * math.pi / 86400, rel=1e-15)
+    assert SCENES["seed_2min"].duration_s == 120.0
+
+
+@pytest.mark.parametrize("name", list(SCENES))
+def test_each_built_in_scene_is_complete_and_its_grid_is_uniform(name: str) -> None:
+    scene = SCENES[name]
+    assert scene.name == name and scene.model in MODELS
+    for text in (scene.title, scene.why_model, scene.source, scene.assumptions):
+        assert len(text) > 20
+    assert "amplitude" in scene.assumptions or "y₀" in scene.assumptions
+    problem = scene.problem()
+    t = problem.t_out
+    assert t[0] == 0.0 and t[-1] == pytest.approx(scene.duration_s, rel=1e-12)
+    assert np.allclose(np.diff(t), scene.output_interval_s, rtol=1e-12, atol=0.0)
+    assert scene.output_interval_s <= scene.params.small_swing_period_s / MIN_OUTPUT_INTERVALS_PER_PERIOD
+    assert problem.model is MODELS[scene.model]
+
+
+@pytest.mark.parametrize("name", REAL_PENDULUMS)
+def test_real_scenes_turn_at_the_quoted_rate(name: str) -> None:
+    # PHYSICS.md "Real pendulums": degrees per hour, clockwise in the north (negative here)
+    quoted = {"pantheon": -11.3, "un_headquarters": -9.8, "griffith": -8.4, "south_pole": 15.04, "lab_3m": -9.76}
+    rate_deg_h = math.degrees(SCENES[name].params.textbook_precession_rate_rad_s) * 3600.0
+    assert rate_deg_h == pytest.approx(quoted[name], abs=0.05)
+
+
+# --- inline scenes ----------------------------------------------------------------------------------------------
+
+
+def test_an_inline_scene_and_a_variant_of_a_built_in_one() -> None:
+    scene = scene_from_mapping("mine", {"model": "spherical", "length_m": 10.0, "latitude_deg": -33.9,
+                                        "amplitude_m": 0.5, "duration_s": 600.0, "release_velocity_m_s": [0.0, 0.01]})
+    assert scene.params.release_velocity_m_s == (0.0, 0.01)
+    period = scene.params.small_swing_period_s
+    assert period / 8 * 0.99 < scene.output_interval_s <= period / 8  # default: about an eighth of a period
+    assert scene.problem().t_out[-1] == pytest.approx(600.0, rel=1e-12)
+    variant = scene_from_mapping("long_pantheon", {"base": "pantheon", "duration_s": 7200.0})
+    assert variant.params == SCENES["pantheon"].params and variant.duration_s == 7200.0
+    assert variant.output_interval_s == SCENES["pantheon"].output_interval_s
+
+
+def test_inline_scene_problems_are_all_reported_with_suggestions() -> None:
+    problems = problems_of("bad", {"model": "lineer", "lenght_m": 3.0, "length_m": 3.0, "latitude_deg": 91.0,
+                                   "amplitude_m": 3.0, "duration_s": 60.0, "centrifugal": "yes"})
+    assert len(problems) == 5
+    joined = "\n".join(problems)
+    assert "unknown key 'lenght_m' (did you mean 'length_m'?)" in joined
+    assert "unknown model 'lineer' (did you mean 'linear'?)" in joined
+    assert "latitude_deg must be within [-90, 90]" in joined
+    assert "amplitude_m = 3.0 m must be less than length_m = 3.0 m" in joined
+    assert "centrifugal must be true or false" in joined
+
+
+def test_inline_scene_grid_problems() -> None:
+    base = {"model": "linear", "length_m": 3.0, "latitude_deg": 45.0, "amplitude_m": 0.1}
+    (coarse,) = problems_of("coarse", {**base, "duration_s": 60.0, "output_interval_s": 1.0})
+    assert "too coarse" in coarse
+    (uneven,) = problems_of("uneven", {**base, "duration_s": 10.1, "output_interval_s": 0.3})
+    assert "not a whole number of output intervals" in uneven and "9.9 or 10.2" in uneven
+    missing = problems_of("missing", {"model": "linear"})
+    assert len(missing) == 1 and "length_m, latitude_deg, amplitude_m, duration_s" in missing[0]
+    typed = problems_of("typed", {**base, "duration_s": "an hour", "release_velocity_m_s": [1.0]})
+    assert len(typed) == 2
+    assert problems_of("based", {"base": "panteon"}) == [
+        "base: unknown scene 'panteon' (did you mean 'pantheon'?); built-in scenes: " + ", ".join(SCENES)]
+
+
+# --- the reference cache ----------------------------------------------------------------------------------------
+
+
+def short_linear_scene(**changes):
+    return dataclasses.replace(SCENES["seed_2min"], **{"name": "cache_test", "duration_s": 60.0, **changes})
+
+
+def test_reference_cache_hit_is_bit_identical_and_a_changed_scene_misses(cache) -> None:
+    scene = short_linear_scene()
+    assert load_cached(scene) is None
+    computed = reference_for(scene)
+    stored = sorted(path.name for path in cache_directory().iterdir())
+    assert stored == [f"{computed.key}.lock", f"{computed.key}.npz"]  # no temporary file left behind
+    loaded = load_cached(scene)
+    assert loaded.t.tobytes() == computed.t.tobytes() and loaded.y.tobytes() == computed.y.tobytes()
+    assert loaded.turning_points.tobytes() == computed.turning_points.tobytes()
+    assert loaded.precession_rate_rad_s == computed.precession_rate_rad_s
+    assert reference_for(scene) is computed  # kept in memory within the process
+    # the name and texts do not change the physics; any physical field does
+    renamed = dataclasses.replace(scene, name="other_name", title="another title")
+    assert reference_key(renamed) == computed.key
+    changed = short_linear_scene(params=dataclasses.replace(scene.params, amplitude_m=0.4))
+    assert reference_key(changed) != computed.key and load_cached(changed) is None
+    longer = dataclasses.replace(scene, duration_s=62.0)
+    assert reference_key(longer) != computed.key and load_cached(longer) is None
+
+
+def test_concurrent_requests_compute_a_reference_once(cache, monkeypatch) -> None:
+    scene = short_linear_scene(duration_s=40.0)
+    calls = []
+    original = reference_module._compute
+
+    def slow_compute(*args, **kwargs):
+        calls.append(1)
+        time.sleep(0.3)  # widen the window in which the other thread would compute too
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(reference_module, "_compute", slow_compute)
+    results = []
+    threads = [threading.Thread(target=lambda: results.append(reference_for(scene))) for _ in range(3)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert len(calls) == 1 and len(results) == 3
+    assert all(result.y.tobytes() == results[0].y.tobytes() for result in results)
+
+
+def test_a_reference_that_cannot_finish_is_an_error_and_is_not_cached(cache, monkeypatch) -> None:
+    from integrators import Solution
+    from integrators.heyoka_taylor import HeyokaTaylorQuad
+
+    def failing(self, problem, **kwargs):
+        return Solution.failure(problem.t_out, "step limit reached")
+
+    monkeypatch.setattr(HeyokaTaylorQuad, "solve", failing)
+    scene = short_linear_scene(duration_s=30.0)
+    with pytest.raises(RuntimeError, match="step limit reached"):
+        reference_for(scene)
+    assert load_cached(scene) is None

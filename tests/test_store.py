@@ -1,0 +1,157 @@
+"""The results store: rows round-trip exactly, resume bookkeeping, study tables, exports and comparisons."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from bench.cli import main as cli_main
+from bench.matrix import parse_matrix
+from bench.schema import COLUMN_NAMES
+from bench.store import ResultsStore, compare_runs, summarize
+
+MATRIX = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4", "cvode_bdf"], "kh": [0.2, 0.1],
+                       "tol": [1e-6]}, source="test", default_name="store_test")
+
+
+def fake_row(run, matrix_id: str, index: int) -> dict:
+    """A complete row with distinct, awkward values (NaN, tiny and huge floats) for round-trip checks."""
+    row = dict.fromkeys(COLUMN_NAMES)
+    row.update(run_key=run.run_key, matrix_id=matrix_id, scene=run.scene.name, model=run.scene.model,
+               integrator=run.integrator, family="test", kh=run.kh, tol=run.tol, step_s=run.step_s, status="ok",
+               message="", duration_s=run.scene.duration_s, n_out=61 + index, energy_conserved=1,
+               energy_max_rel_error=np.float64(1.0 / 3.0 + index), energy_drift_per_s=-2.5e-300,
+               reference_error=math.nan if index == 0 else 10.0 ** -(index + 3), precession_rate_rad_s=-5.48e-5,
+               wall_time_s=0.01 * (index + 1), compile_time_s=0.5, peak_rss_mb=300.0, nfev=np.int64(1000 + index),
+               steps=100 + index, repeats=3)
+    return row
+
+
+@pytest.fixture
+def filled(tmp_path):
+    with ResultsStore(tmp_path / "results" / "db.sqlite") as store:
+        matrix_id, stored = store.start_matrix_run(MATRIX, jobs=2, scheduler=None, resume=False)
+        assert stored == set()
+        rows = [fake_row(run, matrix_id, index) for index, run in enumerate(MATRIX.runs)]
+        for row in rows:
+            store.write_run(row)
+        store.finish_matrix_run(matrix_id)
+        yield store, matrix_id, rows
+
+
+def test_rows_round_trip_bit_for_bit_with_nan_as_missing(filled):
+    store, matrix_id, rows = filled
+    frame = store.frame()
+    assert list(frame.columns) == list(COLUMN_NAMES)
+    assert list(frame["run_key"]) == [row["run_key"] for row in rows]
+    for (_, stored), row in zip(frame.iterrows(), rows):
+        for column in ("energy_max_rel_error", "energy_drift_per_s", "precession_rate_rad_s", "wall_time_s"):
+            assert np.float64(stored[column]).tobytes() == np.float64(row[column]).tobytes()
+        assert int(stored["nfev"]) == int(row["nfev"])
+    assert math.isnan(frame["reference_error"].iloc[0])  # NaN is stored as NULL and read back as NaN
+
+
+def test_write_run_refuses_unknown_columns_and_duplicates(filled):
+    store, matrix_id, rows = filled
+    with pytest.raises(ValueError, match="not columns"):
+        store.write_run({**rows[0], "colour": "red"})
+    with pytest.raises(Exception, match="UNIQUE"):
+        store.write_run(rows[0])
+
+
+def test_provenance_is_recorded(filled):
+    store, matrix_id, rows = filled
+    runs = store.matrix_runs()
+    record = runs.set_index("matrix_id").loc[matrix_id]
+    assert record["matrix_name"] == "store_test" and record["status"] == "finished"
+    assert record["rows_stored"] == len(rows) and record["ok"] == len(rows)
+    assert record["matrix_hash"] == MATRIX.matrix_hash and record["cpu_model"] and record["host"]
+    versions = json.loads(record["package_versions"])
+    assert {"numpy", "scipy", "numba", "heyoka", "scikit-sundae", "pandas"} <= set(versions)
+    assert versions["numpy"] == np.__version__
+
+
+def test_resume_continues_the_same_matrix_run_and_knows_its_rows(filled):
+    store, matrix_id, rows = filled
+    resumed_id, stored = store.start_matrix_run(MATRIX, jobs=1, scheduler=None, resume=True)
+    assert resumed_id == matrix_id and stored == {row["run_key"] for row in rows}
+    fresh_id, stored = store.start_matrix_run(MATRIX, jobs=1, scheduler=None, resume=False)
+    assert fresh_id != matrix_id and stored == set()
+    assert store.resolve_matrix_id(None) == fresh_id and store.resolve_matrix_id(matrix_id[:-2]) == matrix_id
+    assert len(store.frame(all_runs=True)) == len(rows) and store.frame().empty
+
+
+def test_study_tables_and_adequacy_round_trip(filled):
+    store, matrix_id, rows = filled
+    study = pd.DataFrame({"kh": [0.1, 0.2], "error": [1e-3, math.inf]})
+    store.write_table("stability", study)
+    pd.testing.assert_frame_equal(store.read_table("stability"), study)
+    store.write_table("stability", study.iloc[:1], replace=False)
+    assert len(store.read_table("stability")) == 3
+    with pytest.raises(ValueError):
+        store.write_table("runs", study)
+    with pytest.raises(KeyError, match="stability"):
+        store.read_table("no_such_table")
+    store.write_adequacy(matrix_id, "seed_2min", [{"model": "spherical", "trajectory_gap": 0.1}])
+    store.write_adequacy(matrix_id, "seed_2min", [{"model": "spherical", "trajectory_gap": 0.2, "note": "x"}])
+    adequacy = store.adequacy(matrix_id)
+    assert list(adequacy["trajectory_gap"]) == [0.2] and list(adequacy["note"]) == ["x"]
+
+
+def test_compare_finds_a_one_ulp_difference_and_reports_cost_ratios(filled):
+    store, matrix_id, rows = filled
+    frame = store.frame(matrix_id)
+    mismatches, costs, unmatched = compare_runs(frame, frame.copy())
+    assert mismatches.empty and not unmatched
+    changed = frame.copy()
+    changed.loc[1, "reference_error"] = np.nextafter(changed.loc[1, "reference_error"], 1.0)
+    changed["wall_time_s"] *= 2.0
+    mismatches, costs, unmatched = compare_runs(frame, changed)
+    assert list(mismatches["column"]) == ["reference_error"] and mismatches["run_key"].iloc[0] == rows[1]["run_key"]
+    assert np.allclose(costs["wall_time_s_ratio_b_over_a"], 2.0)
+    mismatches, costs, unmatched = compare_runs(frame, frame.iloc[1:])
+    assert unmatched == [rows[0]["run_key"]]
+
+
+def test_summary_has_one_line_per_scene_and_integrator_with_the_best_error(filled):
+    store, matrix_id, rows = filled
+    summary = summarize(store.frame()).set_index("integrator")
+    assert set(summary.index) == {"rk4", "cvode_bdf"}
+    assert summary.loc["rk4", "runs"] == 2
+    assert summary.loc["rk4", "best_reference_error"] == 1e-4  # the finer of rows 0 (NaN) and 1
+    assert summary.loc["rk4", "at"].startswith("kh=0.1")
+
+
+def test_results_command_lists_exports_and_compares(filled, tmp_path, capsys):
+    store, matrix_id, rows = filled
+    database = str(store.path)
+    assert cli_main(["results", "--db", database]) == 0
+    out = capsys.readouterr().out
+    assert matrix_id in out and "rk4" in out and "cvode_bdf" in out
+    csv, parquet = tmp_path / "rows.csv", tmp_path / "rows.parquet"
+    assert cli_main(["results", "--db", database, "--csv", str(csv), "--parquet", str(parquet)]) == 0
+    from_csv, from_parquet = pd.read_csv(csv), pd.read_parquet(parquet)
+    assert list(from_csv["run_key"]) == list(from_parquet["run_key"]) == [row["run_key"] for row in rows]
+    assert from_parquet["energy_max_rel_error"].tolist() == [row["energy_max_rel_error"] for row in rows]
+    assert cli_main(["results", "--db", database, "--compare", matrix_id, matrix_id]) == 0
+    assert "identical bit for bit" in capsys.readouterr().out
+    # a second matrix run with one value changed by one ulp: reported, exit status 1
+    other_id, _ = store.start_matrix_run(MATRIX, jobs=1, scheduler=None, resume=False)
+    for index, row in enumerate(rows):
+        changed = {**row, "matrix_id": other_id}
+        if index == 2:
+            changed["energy_max_rel_error"] = np.nextafter(row["energy_max_rel_error"], 0.0)
+        store.write_run(changed)
+    assert cli_main(["results", "--db", database, "--compare", matrix_id, other_id]) == 1
+    out = capsys.readouterr().out
+    assert "1 MISMATCH" in out and "energy_max_rel_error" in out
+
+
+def test_results_command_without_a_database_exits_2(tmp_path, capsys):
+    assert cli_main(["results", "--db", str(tmp_path / "none.sqlite")]) == 2
+    err = capsys.readouterr().err
+    assert "no results database" in err and "Traceback" not in err

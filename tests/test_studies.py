@@ -1,0 +1,173 @@
+"""The study computations of bench.studies, at small sizes, against what the physics and numerics say
+(PHYSICS.md "Integrators", "Airy precession"): explicit Euler's energy grows as (1 + (kh)²)ⁿ, Verlet's stays
+within (kh)²/4, each fixed-step integrator is stable below its declared limit and blows up above it, and the
+measured precession follows −Ω_E sin φ with the Airy correction at every latitude."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from bench.studies import (
+    STUDIES,
+    LongTimeEnergyConfig,
+    PrecessionLatitudeConfig,
+    StabilitySweepConfig,
+    ensure_studies,
+    long_time_energy,
+    precession_vs_latitude,
+    stability_sweep,
+)
+from integrators.fixed_step import uniform_output_stride
+from integrators.registry import REGISTRY
+from models import PendulumParameters
+from models.parameters import SIDEREAL_EARTH_RATE_RAD_S
+
+LONG_TIME = LongTimeEnergyConfig(model="linear", length_m=10.0, amplitude_m=0.5, duration_s=600.0, n_out=301,
+                                 runs=(("explicit_euler", 0.02), ("verlet", 0.2), ("heyoka_taylor", 1e-15),
+                                       ("not_registered", 0.1)))
+
+
+@pytest.fixture(scope="module")
+def energy_table() -> pd.DataFrame:
+    return long_time_energy(LONG_TIME, progress=False)
+
+
+def _params(config) -> PendulumParameters:
+    return PendulumParameters(length_m=config.length_m, latitude_deg=config.latitude_deg,
+                              amplitude_m=config.amplitude_m)
+
+
+def _effective_kh(config: LongTimeEnergyConfig, kh: float) -> tuple[float, float]:
+    """(effective k·h, effective step in s) after the fixed-step loop shortens the step to fit the grid."""
+    params = _params(config)
+    k = params.pendulum_frequency_rad_s
+    _, step = uniform_output_stride(np.linspace(0.0, config.duration_s, config.n_out), kh / k)
+    return k * step, step
+
+
+def test_explicit_euler_energy_grows_as_the_stability_function_says(energy_table: pd.DataFrame) -> None:
+    euler = energy_table[energy_table["integrator"] == "explicit_euler"]
+    assert set(euler["status"]) == {"ok"}
+    kh, step = _effective_kh(LONG_TIME, 0.02)
+    steps = euler["t_s"].to_numpy() / step
+    theory = (1.0 + kh * kh) ** steps - 1.0  # |1 + ikh|² per step (Hairer, Nørsett & Wanner I, §IV.2)
+    # The Coriolis term splits the two circular modes' growth factors into 1 + h²(Ω ∓ a)²: the energy ratio
+    # can differ from (1 + (kh)²)ⁿ by exp(±2(a/k)·n(kh)²); allow twice that.
+    a_over_k = _params(LONG_TIME).vertical_rate_rad_s / _params(LONG_TIME).pendulum_frequency_rad_s
+    tolerance = 4.0 * a_over_k * steps * kh * kh + 1e-12
+    measured = euler["energy_rel_error"].to_numpy()
+    assert np.all(np.abs((1.0 + measured) / (1.0 + theory) - 1.0) <= tolerance)
+    assert measured[-1] > 1.0  # it really grows: the energy has more than doubled in 600 s
+
+
+def test_verlet_energy_stays_within_the_modified_energy_bound(energy_table: pd.DataFrame) -> None:
+    verlet = energy_table[energy_table["integrator"] == "verlet"]
+    kh, _ = _effective_kh(LONG_TIME, 0.2)
+    # Störmer-Verlet conserves H̃ = ½v² + ½k²x²(1 − (kh)²/4) on the oscillator, so E/E₀ − 1 ∈ [−(kh)²/4, 0]
+    # for a release from rest (Hairer, Lubich & Wanner, GNI §I.1 and §IX); 1e-9 allows round-off.
+    errors = verlet["energy_rel_error"].to_numpy()
+    assert np.all(errors <= 1e-9) and np.all(errors >= -(kh * kh / 4.0) - 1e-9)
+    assert errors.min() < -0.5 * kh * kh / 4.0  # the oscillation is there (the bound is not vacuous)
+
+
+def test_taylor_energy_stays_near_round_off(energy_table: pd.DataFrame) -> None:
+    taylor = energy_table[energy_table["integrator"] == "heyoka_taylor"]
+    assert set(taylor["status"]) == {"ok"}
+    # tol 1e-15 per step, at most ~100 steps per swing, 600 s / 6.3 s swings: accumulated ≤ 1e-15·100·100
+    assert taylor["energy_rel_error"].abs().max() < 1e-11
+
+
+def test_an_unknown_integrator_becomes_a_failed_run_not_a_crash(energy_table: pd.DataFrame) -> None:
+    missing = energy_table[energy_table["integrator"] == "not_registered"]
+    assert len(missing) == LONG_TIME.n_out - 1
+    assert set(missing["status"]) == {"failed"}
+    assert "unknown integrator" in missing["message"].iloc[0]
+    assert missing["energy_rel_error"].isna().all()
+
+
+STABILITY = StabilitySweepConfig(steps=400, kh=(0.5, 1.9, 2.1, 2.7, 2.9, 3.5))
+
+
+@pytest.fixture(scope="module")
+def stability_table() -> pd.DataFrame:
+    return stability_sweep(STABILITY, progress=False)
+
+
+def test_every_fixed_step_integrator_is_swept_with_its_declared_limit(stability_table: pd.DataFrame) -> None:
+    fixed_step = {name for name, integrator in REGISTRY.items() if not integrator.adaptive}
+    assert set(stability_table["integrator"]) == fixed_step
+    for name, rows in stability_table.groupby("integrator"):
+        declared = REGISTRY[name].stability_limit_kh
+        limits = rows["stability_limit_kh"].to_numpy()
+        assert (np.isnan(limits).all() if declared is None else np.all(limits == declared))
+        assert sorted(rows["kh"]) == sorted(STABILITY.kh)
+
+
+def test_stable_below_the_limit_and_blown_up_above_it(stability_table: pd.DataFrame) -> None:
+    for row in stability_table.itertuples():
+        limit = row.stability_limit_kh
+        if math.isnan(limit):
+            # explicit Euler: energy grows by (1 + (kh)²) every step, whatever the step
+            growth = (1 + row.kh**2) ** STABILITY.steps - 1
+            assert row.status == "diverged" or row.energy_max_rel_error >= 0.99 * growth
+        elif row.kh <= 0.95 * limit:
+            # stable: bounded. Symplectic Euler's energy ratio along a stable orbit reaches
+            # (1 + kh/2)/(1 − kh/2) (its conserved quadratic form), 39 at kh = 1.9; 100 leaves margin.
+            assert row.status == "ok" and row.energy_max_rel_error < 100.0, row
+        elif row.kh >= 1.02 * limit:
+            # unstable: an eigenvalue of modulus > 1 (RK4 |R(2.9i)|² = 1.42) over 400 steps
+            assert row.status == "diverged" or row.energy_max_rel_error > 1e6, row
+
+
+def test_precession_follows_the_airy_corrected_textbook_rate() -> None:
+    config = PrecessionLatitudeConfig(duration_s=900.0, n_latitudes=7, amplitude_m=1.0, length_m=10.0)
+    table = precession_vs_latitude(config, progress=False)
+    assert list(table["latitude_deg"]) == list(np.linspace(-90.0, 90.0, 7))
+    theta0 = config.amplitude_m / config.length_m
+    # Beyond Airy's (3/8)θ₀² the release side adds a term of order θ₀³ (PHYSICS.md "Airy precession"):
+    # allow θ₀³·Ω_E (four times ¼θ₀³) plus three standard errors.
+    tolerance = theta0**3 * SIDEREAL_EARTH_RATE_RAD_S + 3.0 * table["rate_stderr_rad_s"]
+    assert np.all(np.abs(table["rate_rad_s"] - table["airy_rate_rad_s"]) <= tolerance)
+    textbook = -SIDEREAL_EARTH_RATE_RAD_S * np.sin(np.radians(table["latitude_deg"]))
+    assert np.allclose(table["textbook_rate_rad_s"], textbook, rtol=1e-15, atol=0.0)
+    north = table[table["latitude_deg"] > 0]
+    south = table[table["latitude_deg"] < 0]
+    assert (north["rate_rad_s"] < 0).all() and (south["rate_rad_s"] > 0).all()  # clockwise in the north
+    period = 2 * math.pi / math.sqrt(9.81 / config.length_m)
+    expected_points = 2 * config.duration_s / period
+    assert np.all(np.abs(table["turning_points"] - expected_points) <= 2)
+
+
+class _MemoryStore:
+    """Stands in for bench.store.ResultsStore's read_table/write_table (KeyError for a missing table)."""
+
+    def __init__(self) -> None:
+        self.tables: dict[str, pd.DataFrame] = {}
+
+    def read_table(self, name: str) -> pd.DataFrame:
+        return self.tables[name]
+
+    def write_table(self, name: str, frame: pd.DataFrame) -> None:
+        self.tables[name] = frame
+
+
+def test_ensure_studies_computes_missing_tables_once_and_reads_them_back() -> None:
+    small = {
+        "study_long_time_energy": LongTimeEnergyConfig(model="linear", duration_s=60.0, n_out=31,
+                                                       runs=(("verlet", 0.2),)),
+        "study_stability": StabilitySweepConfig(steps=20, kh=(0.5,)),
+        "study_precession_latitude": PrecessionLatitudeConfig(duration_s=120.0, n_latitudes=3),
+    }
+    store = _MemoryStore()
+    first = ensure_studies(store, configs=small, progress=False)
+    assert set(first) == set(STUDIES) == set(store.tables)
+    sentinel = store.tables["study_stability"].assign(kh=-1.0)
+    store.tables["study_stability"] = sentinel
+    again = ensure_studies(store, configs=small, progress=False)
+    assert (again["study_stability"]["kh"] == -1.0).all()  # read back, not recomputed
+    recomputed = ensure_studies(store, recompute=True, configs=small, progress=False)
+    pd.testing.assert_frame_equal(recomputed["study_stability"], first["study_stability"])  # deterministic
