@@ -161,7 +161,7 @@ class ResultsStore:
         With ``resume`` the latest matrix run with the same matrix hash (same runs, same code version) is
         continued, so that one matrix id ends up holding every row once; otherwise a new id is made.
         """
-        from bench.matrix import code_version, git_commit
+        from bench.matrix import code_version, git_commit  # here: bench.matrix imports this module
 
         now = utc_now()
         if resume:
@@ -366,24 +366,31 @@ def _bits_equal(left: pd.Series, right: pd.Series) -> pd.Series:
     return (left == right) | (left.isna() & right.isna())
 
 
+def run_identity(frame: pd.DataFrame) -> pd.Series:
+    """``scene integrator kh=…|tol=…`` per row, with the exact setting (float repr): what a run is, whatever
+    the code version that produced it (run keys include the code version, so they differ across versions)."""
+    settings = [f"tol={float(tol)!r}" if pd.notna(tol) else f"kh={float(kh)!r}" for kh, tol in zip(frame["kh"], frame["tol"])]
+    return frame["scene"] + " " + frame["integrator"] + " " + pd.Series(settings, index=frame.index)
+
+
 def compare_runs(frame_a: pd.DataFrame, frame_b: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame, list[str]]:
-    """Compare two matrix runs row by row (matched on run_key).
+    """Compare two matrix runs row by row, matched on ``run_identity`` (scene, integrator, exact setting).
 
     Returns (mismatches, costs, unmatched): one mismatch line per differing deterministic column of a row
-    (``DETERMINISTIC_COLUMNS``; must be empty for the same matrix on the same machine), the cost ratios B/A
-    per row, and the run keys present in only one of the two.
+    (``DETERMINISTIC_COLUMNS``; must be empty for the same matrix and code on the same machine), the cost
+    ratios B/A per row, and the runs present in only one of the two.
     """
-    key_columns = ["run_key", "scene", "integrator"]
-    merged = frame_a.merge(frame_b, on=key_columns, suffixes=("_a", "_b"), how="inner")
-    unmatched = sorted(set(frame_a["run_key"]) ^ set(frame_b["run_key"]))
+    left = frame_a.assign(run=run_identity(frame_a))
+    right = frame_b.assign(run=run_identity(frame_b))
+    merged = left.merge(right, on=["run", "scene", "integrator"], suffixes=("_a", "_b"), how="inner")
+    unmatched = sorted(set(left["run"]) ^ set(right["run"]))
     mismatches = []
     for column in DETERMINISTIC_COLUMNS:
         equal = _bits_equal(merged[f"{column}_a"], merged[f"{column}_b"])
-        for _, row in merged[~equal].iterrows():
-            mismatches.append({"scene": row["scene"], "integrator": row["integrator"], "run_key": row["run_key"],
-                               "column": column, "a": row[f"{column}_a"], "b": row[f"{column}_b"]})
-    costs = merged[key_columns].copy()
-    costs["setting"] = [setting_label(kh, tol) for kh, tol in zip(merged["kh_a"], merged["tol_a"])]
+        mismatches += [{"run": run, "column": column, "a": a, "b": b}
+                       for run, a, b in zip(merged["run"][~equal], merged[f"{column}_a"][~equal],
+                                            merged[f"{column}_b"][~equal])]
+    costs = merged[["run", "scene", "integrator"]].copy()
     for column in COST_COLUMNS:
         costs[f"{column}_ratio_b_over_a"] = merged[f"{column}_b"] / merged[f"{column}_a"]
-    return pd.DataFrame(mismatches, columns=["scene", "integrator", "run_key", "column", "a", "b"]), costs, unmatched
+    return pd.DataFrame(mismatches, columns=["run", "column", "a", "b"]), costs, unmatched

@@ -282,7 +282,8 @@ class SeedStudy:
     """The seed study's series (time on a common grid) and the scalar findings quoted in the report.
 
     ``series`` columns: t_s; seed_x_m, seed_y_m (eqs. 14-15, ω = 2π/24 h); exact_x_m, exact_y_m (exact linear
-    solution, sidereal Ω_E); euler_energy_rel_error, euler_energy_theory (1 + (kh)²)ⁿ − 1,
+    solution, sidereal Ω_E); euler_x_m, euler_y_m, verlet_x_m, verlet_y_m (explicit Euler and Verlet on eqs. 4-5);
+    euler_amplitude_theory_m A·√((1 + (kh)²)ⁿ) (the amplitude the energy growth implies); euler_energy_rel_error, euler_energy_theory (1 + (kh)²)ⁿ − 1,
     symplectic_energy_rel_error, verlet_energy_rel_error, model_energy_rel_error (the reference run of eqs.
     4-5: the model's own energy change), model_energy_formula (∫ dE/dt of the model, PHYSICS.md "Models" 3);
     seed_difference_m |r_Euler − r_eqs.14-15|; euler_error_m |r_Euler − r_ref|; model_difference_m
@@ -331,7 +332,7 @@ def centrifugal_check(config: SeedConfig, position_m: tuple[float, float] = (0.3
 
 
 def seed_revisited(config: SeedConfig = SeedConfig()) -> SeedStudy:
-    """Reproduce the seed note's three figures and the numbers that correct them (see ``SeedStudy``)."""
+    """Reproduce the seed note's four figures and the numbers that correct them (see ``SeedStudy``)."""
     linear = get_model("linear")
     seed_planar = get_model("seed_planar")
     seed_params = _params(config, SEED_EARTH_RATE_RAD_S)
@@ -362,6 +363,9 @@ def seed_revisited(config: SeedConfig = SeedConfig()) -> SeedStudy:
         "t_s": t,
         "seed_x_m": approx[:, 0], "seed_y_m": approx[:, 1],
         "exact_x_m": exact[:, 0], "exact_y_m": exact[:, 1],
+        "euler_x_m": euler[:, 0], "euler_y_m": euler[:, 1],
+        "verlet_x_m": verlet[:, 0], "verlet_y_m": verlet[:, 1],
+        "euler_amplitude_theory_m": config.amplitude_m * np.sqrt((1.0 + kh * kh) ** (t / config.euler_step_s)),
         "euler_energy_rel_error": relative_energy_error(seed_planar, seed_params, euler),
         "euler_energy_theory": (1.0 + kh * kh) ** (t / config.euler_step_s) - 1.0,
         "symplectic_energy_rel_error": relative_energy_error(seed_planar, seed_params, symplectic),
@@ -376,8 +380,13 @@ def seed_revisited(config: SeedConfig = SeedConfig()) -> SeedStudy:
         "day_length_difference_m": _distance(exact, exact_seed_rate),
         "verlet_linear_error_m": _distance(verlet_linear, exact),
     })
+    last_swing = np.nonzero(t >= t[-1] - seed_params.small_swing_period_s)[0]
+    euler_reach = last_swing[np.argmax(np.hypot(euler[last_swing, 0], euler[last_swing, 1]))]
     numbers = {
         "kh": kh,
+        "euler_amplitude_end_m": float(np.hypot(euler[euler_reach, 0], euler[euler_reach, 1])),
+        "euler_amplitude_theory_end_m": float(series["euler_amplitude_theory_m"].iloc[euler_reach]),
+        "verlet_amplitude_end_m": float(np.max(np.hypot(verlet[last_swing, 0], verlet[last_swing, 1]))),
         "euler_steps": config.duration_s / config.euler_step_s,
         "solar_day_rate_rad_s": SEED_EARTH_RATE_RAD_S,
         "sidereal_rate_rad_s": SIDEREAL_EARTH_RATE_RAD_S,

@@ -103,7 +103,7 @@ class ScipyIvpIntegrator(AdaptiveIntegrator):
         if tol < SCIPY_MIN_RTOL:
             raise ValueError(
                 f"{self.name}: tolerance {tol!r} is below scipy's floor 100 × machine epsilon = {SCIPY_MIN_RTOL:.3g} "
-                "(scipy would silently use the floor)"
+                "(scipy would use the floor instead, with only a warning)"
             )
 
     def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:

@@ -12,7 +12,9 @@ on the 11 fixed-step loops: 24 s in a process with a warm cache against 28 s col
 key is a fingerprint of the code instead: for every function reached through closure cells and globals, its
 module, qualified name, bytecode, constants, names and numba options, and the values of the scalar globals it
 reads (numba freezes those into the machine code). The fingerprint also covers callees in other files, whose
-edits numba's own key (the source file's timestamp) does not see.
+edits numba's own key (the source file's timestamp) does not see. Two more changes make the reuse safe: each
+compiled function is named after its fingerprint (``jit``), and each cache entry is stored in a file named
+after its key (``_KeyedDataCacheFile``), so that processes compiling at the same time cannot swap entries.
 
 **Why ``error_model="numpy"``.** With numba's default ("python") every float division checks its divisor and
 may raise ZeroDivisionError. Those raise paths stop numba from removing the reference counting of the
@@ -29,10 +31,10 @@ import types
 from typing import Callable
 
 from numba import njit
-from numba.core.caching import FunctionCache
+from numba.core.caching import FunctionCache, IndexDataCacheFile
 from numba.core.dispatcher import Dispatcher
-from numba.core.serialize import dumps
 from numba.core.extending import _Intrinsic
+from numba.core.serialize import dumps
 from numba.extending import register_jitable
 
 JIT_OPTIONS: dict[str, str] = {"error_model": "numpy"}
@@ -72,8 +74,32 @@ def _fingerprint(value: object, seen: set[int]) -> str:
     return f"pickle {hashlib.sha256(dumps(value)).hexdigest()}"  # numba's own key for anything else
 
 
+class _KeyedDataCacheFile(IndexDataCacheFile):
+    """numba's index and data files, with each data file named after its key.
+
+    numba names a new data file by the first number its copy of the index does not use yet, so two processes
+    saving different entries at the same time can write to the same file, and the index can then point a key
+    to another key's machine code (the workers of ``foucault-bench run`` compile at the same time, into one
+    cache). Named after the key, a data file only ever holds that key's code; writing the data before the
+    index, a lost index update only costs a recompilation.
+    """
+
+    def save(self, key, data):
+        data_name = f"{self._index_name[:-len('.nbi')]}.{hashlib.sha256(repr(key).encode()).hexdigest()[:16]}.nbc"
+        self._save_data(data_name, data)
+        overloads = self._load_index()
+        overloads[key] = data_name
+        self._save_index(overloads)
+
+
 class _FingerprintCache(FunctionCache):
-    """numba's per-function disk cache, keyed by the fingerprint of the function instead of its cell pickle."""
+    """numba's per-function disk cache, keyed by the fingerprint of the function instead of its cell pickle,
+    with one data file per key (``_KeyedDataCacheFile``)."""
+
+    def __init__(self, py_func: Callable) -> None:
+        super().__init__(py_func)
+        self._cache_file = _KeyedDataCacheFile(cache_path=self._cache_path, filename_base=self._impl.filename_base,
+                                               source_stamp=self._impl.locator.get_source_stamp())
 
     def _index_key(self, sig, codegen):
         fingerprint = _fingerprint(self._py_func, set())
@@ -82,10 +108,20 @@ class _FingerprintCache(FunctionCache):
 
 def jit(fn: Callable | None = None, **options) -> Dispatcher | Callable[[Callable], Dispatcher]:
     """Compile ``fn`` with numba (nopython, ``JIT_OPTIONS`` plus ``options``), cached on disk under a
-    deterministic key. Use as ``@jit`` or ``@jit(inline="always")``."""
+    deterministic key. Use as ``@jit`` or ``@jit(inline="always")``.
+
+    numba compiles a copy of ``fn`` whose qualified name ends in its fingerprint: numba names the machine code
+    after the qualified name and a per-process counter, so two closures of the same source (the loop of RK4
+    and of Verlet, the right-hand side of two models) compiled in different processes could otherwise load
+    under one symbol name into a third process, which then runs one in place of the other.
+    """
     if fn is None:
         return lambda function: jit(function, **options)
-    dispatcher = njit(**JIT_OPTIONS, **options)(fn)
+    digest = hashlib.sha256(f"{_fingerprint(fn, set())}{sorted(options.items())}".encode()).hexdigest()[:16]
+    unique = types.FunctionType(fn.__code__, fn.__globals__, fn.__name__, fn.__defaults__, fn.__closure__)
+    unique.__qualname__ = f"{fn.__qualname__}_{digest}"
+    unique.__module__, unique.__doc__, unique.__kwdefaults__ = fn.__module__, fn.__doc__, fn.__kwdefaults__
+    dispatcher = njit(**JIT_OPTIONS, **options)(unique)
     dispatcher._cache = _FingerprintCache(dispatcher.py_func)  # what njit(cache=True) does, with our key
     return dispatcher
 

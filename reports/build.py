@@ -120,6 +120,8 @@ def _summary_tables(builder: _Builder, runs: pd.DataFrame) -> None:
 def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
     builder.add(Heading("Work-precision"), Paragraph(
         "Each verdict against the two costs, wall time and right-hand-side evaluations, one line per integrator. "
+        "The energy error is the largest deviation over the run; the energy drift its least-squares trend, "
+        "which tells a drifting integrator from one whose error oscillates within a bound. "
         "The precession-rate error is the integrator's own: measured rate against the reference solution's rate "
         "on the same grid. The analytic gap is the distance from the exact solution of the linear model, a model "
         "error for the other models."))
@@ -259,6 +261,8 @@ def _provenance(store: ResultsStore, matrix_id: str) -> dict[str, str]:
 
 def main(args: argparse.Namespace) -> int:
     started = time.perf_counter()
+    if args.out.exists() and not args.out.is_dir():
+        raise InputError(f"--out {args.out} exists and is not a folder")
     with ResultsStore(args.db, create=False) as store:
         matrix_id = store.resolve_matrix_id(args.matrix_id)
         runs = store.frame(matrix_id)

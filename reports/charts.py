@@ -83,6 +83,24 @@ def _ordered_integrators(frame: pd.DataFrame) -> list[tuple[str, str]]:
     return sorted(((row.integrator, row.family) for row in pairs.itertuples()), key=lambda p: (p[1], p[0]))
 
 
+def set_log_scales(axes: Axes, x: bool = True, y: bool = True) -> None:
+    """Log scale on x and/or y. An axis without any finite positive data (every run failed, say) gets the
+    placeholder limits 1 to 10 and the panel says so, instead of failing to draw."""
+    empty = False
+    for use, interval, set_scale, set_limits in ((x, axes.dataLim.intervalx, axes.set_xscale, axes.set_xlim),
+                                                 (y, axes.dataLim.intervaly, axes.set_yscale, axes.set_ylim)):
+        if not use:
+            continue
+        set_scale("log")
+        low, high = interval
+        if not (np.isfinite(low) and np.isfinite(high) and high > 0):
+            set_limits(1.0, 10.0)
+            empty = True
+    if empty:
+        axes.text(0.5, 0.5, "no finite positive values to plot", transform=axes.transAxes, ha="center",
+                  color="grey")
+
+
 def save(figure: Figure, stem: Path) -> Path:
     """Write ``stem``.png (120 dpi) and ``stem``.svg; return the stem."""
     stem.parent.mkdir(parents=True, exist_ok=True)
@@ -126,9 +144,9 @@ def outcome_legend_handles() -> list[Line2D]:
 
 
 def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str) -> list[Line2D]:
-    """One line per integrator through its ok runs (sorted by x); diverged and failed runs and ok runs without
-    a plottable value as edge markers. Returns one legend handle per integrator, labelled with its counts of
-    diverged and failed runs."""
+    """One line per integrator through its ok runs in sweep order (largest k·h or tolerance first); diverged and
+    failed runs and ok runs without a plottable value as edge markers. Returns one legend handle per integrator,
+    labelled with its counts of diverged and failed runs."""
     handles = []
     left_slots = {"top": 0, "bottom": 0}
     for integrator, family in _ordered_integrators(frame):
@@ -139,7 +157,8 @@ def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str) -
         x = ok[x_column].to_numpy(dtype=float)
         y = ok[y_column].to_numpy(dtype=float)
         plottable = np.isfinite(x) & (x > 0) & np.isfinite(y) & (y > 0)
-        order = np.argsort(x[plottable])
+        setting = ok["kh"].fillna(ok["tol"]).to_numpy(dtype=float)[plottable]
+        order = np.argsort(-setting, kind="stable")  # along the sweep: coarse to fine
         counts = [f"{int((rows['status'] == status).sum())} {status}" for status in (STATUS_DIVERGED, STATUS_FAILED)
                   if (rows["status"] == status).any()]
         label = integrator + (f" ({', '.join(counts)})" if counts else "")
@@ -159,10 +178,11 @@ def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str) -
 VERDICT_LABELS: dict[str, tuple[str, str]] = {
     "reference_error": ("reference error", "max |r − r_ref| / A"),
     "energy_max_rel_error": ("energy error", "max |E − E₀| / E_swing"),
+    "energy_drift_per_s": ("energy drift", "|slope of (E − E₀) / E_swing against t| (1/s)"),
     "precession_rate_ref_error": ("precession-rate error", "|rate − rate_ref| / (Ω_E |sin φ|)"),
     "analytic_gap_exact": ("analytic gap", "max |r − r_exact, linear| / A"),
 }
-"""Verdict column → (short title, axis label) for the work-precision charts."""
+"""Verdict column → (short title, axis label) for the work-precision charts (absolute values are plotted)."""
 
 COST_LABELS: dict[str, str] = {
     "wall_time_s": "wall time per run (s), median of repeats",
@@ -175,13 +195,13 @@ def work_precision(scene_frame: pd.DataFrame, verdict: str, stem: Path) -> Path:
     integrator, fixed-step and tolerance sweeps on the same axes."""
     scene = scene_frame["scene"].iloc[0]
     title, label = VERDICT_LABELS[verdict]
+    scene_frame = scene_frame.assign(**{verdict: scene_frame[verdict].abs()})
     figure = Figure(figsize=(13.5, 5.2), layout="constrained")
     axes_pair = figure.subplots(1, 2, sharey=True)
     handles = []
     for axes, cost in zip(axes_pair, COST_LABELS):
         handles = plot_sweeps(axes, scene_frame, cost, verdict)
-        axes.set_xscale("log")
-        axes.set_yscale("log")
+        set_log_scales(axes)
         axes.set_xlabel(COST_LABELS[cost])
         axes.grid(True, which="major", alpha=0.3)
     axes_pair[0].set_ylabel(label)
@@ -202,8 +222,7 @@ def convergence(scene_frame: pd.DataFrame, orders: dict[str, float], stem: Path)
         order = orders.get(integrator)
         fitted = "no fit" if order is None or not np.isfinite(order) else f"fitted order {order:.2f}"
         handle.set_label(f"{handle.get_label()}, {fitted}")
-    axes.set_xscale("log")
-    axes.set_yscale("log")
+    set_log_scales(axes)
     axes.set_xlabel("step size h (s)")
     axes.set_ylabel("reference error, max |r − r_ref| / A")
     axes.grid(True, which="major", alpha=0.3)
@@ -239,8 +258,7 @@ def long_time_energy(table: pd.DataFrame, stem: Path) -> Path:
             last = t[finite][-1] if finite.any() else np.nan
             mark_on_edge(axes, np.array([last]), style["color"],
                          DIVERGED_MARKER if status == STATUS_DIVERGED else FAILED_MARKER, "top")
-    axes.set_xscale("log")
-    axes.set_yscale("log")
+    set_log_scales(axes)
     axes.set_xlabel("time t (s)")
     axes.set_ylabel("relative energy error |E(t) − E₀| / E_swing")
     axes.grid(True, which="major", alpha=0.3)
@@ -279,7 +297,7 @@ def stability(table: pd.DataFrame, stem: Path) -> Path:
         else:
             axes.text(0.02, 0.04, "no stability limit: unstable for every h > 0", transform=axes.transAxes,
                       fontsize=9)
-        axes.set_yscale("log")
+        set_log_scales(axes, x=False)
         axes.set_title(integrator, pad=12)
         axes.grid(True, which="major", alpha=0.3)
     for axes in panels[len(integrators):]:
@@ -354,7 +372,7 @@ def adequacy(table: pd.DataFrame, stem: Path) -> Path:
         for position in positions[~shown]:
             axes.text(0.01, position, "no finite value", transform=axes.get_yaxis_transform(), va="center",
                       fontsize=8)
-        axes.set_xscale("log")
+        set_log_scales(axes, y=False)
         finite = np.concatenate(values)
         if finite.size:
             centre = np.sqrt(finite.min() * finite.max())

@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import textwrap
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -43,6 +44,8 @@ DEGREES_PER_HOUR_PER_RAD_S = math.degrees(1.0) * 3600.0
 OUTPUT_POINTS_PER_PERIOD = 16
 """Output grid density: 16 points per small-swing period (turning points need fewer than a quarter period
 between samples, ``bench.verdicts``; the extra density draws the swing smoothly)."""
+MAX_OUTPUT_POINTS = 400_000
+"""Largest output grid the command accepts (the view redraws it on every slider move)."""
 
 
 ANIMATION_DPI = 80
@@ -125,10 +128,11 @@ def readout_text(result: SimulationResult) -> str:
     stderr = result.measured_rate_stderr_rad_s * DEGREES_PER_HOUR_PER_RAD_S
     lines = [f"{s.integrator}, {s.model} model, {s.hours:g} h", f"{len(result.turning_points)} turning points"]
     if result.status != STATUS_OK:
-        lines.append(f"run {result.status}: {result.message[:45]}")
+        lines += textwrap.wrap(f"run {result.status}: {result.message}", width=48)
+    measured_text = f"{measured:+.4f} ± {stderr:.1e}" if math.isfinite(measured) else "– (not measured)"
     lines += [
         "precession rate (°/h, counter-clockwise +)",
-        f"  measured:          {measured:+.4f} ± {stderr:.1e}",
+        f"  measured:          {measured_text}",
         f"  expected −ω sin φ: {expected:+.4f}",
         f"  (ω = {s.earth_rate_factor:g} Ω_E, φ = {s.latitude_deg:g}°)",
     ]
@@ -178,7 +182,8 @@ class SimulationView:
             return
         self.show_until(len(self.result.t_s) - 1)
         self.readout.set_text(readout_text(self.result))
-        radius = 1.1 * settings.amplitude_m
+        reach = np.hypot(self.result.numeric[:, 0], self.result.numeric[:, 1])
+        radius = 1.1 * max(settings.amplitude_m, float(np.nanmax(reach)) if np.isfinite(reach).any() else 0.0)
         self.axes.set_xlim(-radius, radius)
         self.axes.set_ylim(-radius, radius)
         self.axes.set_title(f"Seen from above: L = {settings.length_m:g} m, A = {settings.amplitude_m:g} m, "
@@ -304,9 +309,13 @@ def settings_from_args(args: argparse.Namespace) -> SimulationSettings:
                                   length_m=args.length, amplitude_m=args.amplitude, hours=args.hours,
                                   model=args.model, integrator=args.integrator, setting=setting)
     try:
-        settings.params()
+        params = settings.params()
     except ValueError as error:
         raise InputError(str(error)) from None
+    points = OUTPUT_POINTS_PER_PERIOD * settings.hours * 3600.0 / params.small_swing_period_s
+    if points > MAX_OUTPUT_POINTS:
+        raise InputError(f"{settings.hours:g} h of a {params.small_swing_period_s:.3g} s pendulum needs {points:.3g} "
+                         f"output points, more than {MAX_OUTPUT_POINTS}: shorten --hours")
     return settings
 
 

@@ -42,7 +42,8 @@ def _row(scene: str, integrator: str, **values: object) -> dict[str, object]:
     error = row.get("reference_error")
     if row["status"] == "ok" and isinstance(error, float) and math.isfinite(error):
         row.update(energy_max_rel_error=0.1 * error)
-        if scene == "lab":  # the other scene has no precession or analytic verdicts: their charts are skipped
+        if scene == "lab":
+            row.update(energy_drift_per_s=-1e-3 * error)  # the other scene has no precession or analytic verdicts: their charts are skipped
             row.update(precession_rate_ref_error=0.5 * error, precession_rate_error=0.5 * error + 1e-4,
                        analytic_gap_exact=error + 1e-7)
     return row
@@ -116,7 +117,8 @@ def test_report_writes_every_file_it_links(report: Path) -> None:
     for figure in figures:
         assert (report / figure).with_suffix(".svg").is_file()
     expected_figures = {f"figures/work_precision_lab_{verdict}.png" for verdict in
-                        ("reference_error", "energy_max_rel_error", "precession_rate_ref_error", "analytic_gap_exact")}
+                        ("reference_error", "energy_max_rel_error", "energy_drift_per_s", "precession_rate_ref_error",
+                         "analytic_gap_exact")}
     expected_figures |= {f"figures/work_precision_pantheon_{verdict}.png"
                          for verdict in ("reference_error", "energy_max_rel_error")}
     expected_figures |= {f"figures/convergence_{scene}.png" for scene in SCENES}
@@ -247,3 +249,14 @@ def test_report_command_without_a_database_is_a_clear_error(tmp_path: Path, caps
 
     assert cli_main(["report", "--db", str(tmp_path / "missing.sqlite"), "--out", str(tmp_path / "r")]) == 2
     assert "no results database" in capsys.readouterr().err
+
+
+def test_a_scene_where_every_run_failed_still_draws_and_tabulates(tmp_path: Path) -> None:
+    from reports import charts
+
+    runs = results_fixture()
+    failed = runs[(runs["scene"] == "lab") & (runs["integrator"] == "scipy_lsoda")]
+    stem = charts.work_precision(failed, "reference_error", tmp_path / "all_failed")
+    assert stem.with_suffix(".png").stat().st_size > 0 and stem.with_suffix(".svg").stat().st_size > 0
+    summary = tables.matched_accuracy(failed)
+    assert list(summary["outcome"]) == ["no ok run (failed)"] and list(summary["failed"]) == [1]

@@ -38,6 +38,22 @@ def test_explicit_euler_energy_grows_as_one_plus_kh_squared_to_the_n(study: Seed
     assert np.all(np.diff(series[::200]) > 0)  # monotone growth, sampled every 10 s
 
 
+def test_the_euler_swing_widens_as_its_energy_says(study: SeedStudy) -> None:
+    n = study.numbers
+    amplitude = study.config.amplitude_m
+    # the energy ½v² + ½k²r² grows by (1 + (kh)²) per step, so the swing's reach grows as its square root
+    # (compared at the grid time of the largest |r| in the last swing); that grid point misses the true turning
+    # point by at most A(1 − cos(kΔt/2)), and the tolerance on the energy growth (see above) carries over halved
+    k = math.sqrt(9.81 / study.config.length_m)
+    sampling = amplitude * (1.0 - math.cos(k * study.config.output_spacing_s / 2.0))
+    growth = 2.0 * _a_over_k(study) * n["euler_steps"] * n["kh"] ** 2 + n["model_energy_max"]
+    assert abs(n["euler_amplitude_end_m"] - n["euler_amplitude_theory_end_m"]) <= (
+        sampling + growth * n["euler_amplitude_theory_end_m"])
+    assert n["euler_amplitude_end_m"] > 1.05 * amplitude
+    # Verlet on the same equations: the reach stays A, to within the grid sampling and the model's energy change
+    assert abs(n["verlet_amplitude_end_m"] - amplitude) <= sampling + n["model_energy_max"] * amplitude
+
+
 def test_symplectic_euler_is_the_bounded_one(study: SeedStudy) -> None:
     n = study.numbers
     # symplectic Euler keeps the quadratic form ½v² + ½k²x² − (h k²/2)·x·v: E/E₀ stays within
@@ -89,7 +105,7 @@ def test_seed_command_writes_figures_and_findings(tmp_path: Path, study: SeedStu
 
     monkeypatch.setattr(reports.seed, "seed_revisited", lambda: study)  # computed once, by the fixture
     assert cli_main(["seed", "--out", str(tmp_path)]) == 0
-    for name in ("trajectory", "energy", "difference"):
+    for name in ("trajectory", "euler", "energy", "difference"):
         for suffix in ("png", "svg"):
             assert (tmp_path / "figures" / f"seed_{name}.{suffix}").stat().st_size > 1000
     text = (tmp_path / "SEED.md").read_text(encoding="utf-8")

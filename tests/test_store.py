@@ -111,10 +111,11 @@ def test_compare_finds_a_one_ulp_difference_and_reports_cost_ratios(filled):
     changed.loc[1, "reference_error"] = np.nextafter(changed.loc[1, "reference_error"], 1.0)
     changed["wall_time_s"] *= 2.0
     mismatches, costs, unmatched = compare_runs(frame, changed)
-    assert list(mismatches["column"]) == ["reference_error"] and mismatches["run_key"].iloc[0] == rows[1]["run_key"]
+    assert list(mismatches["column"]) == ["reference_error"]
+    assert mismatches["run"].iloc[0] == f"seed_2min rk4 kh={rows[1]['kh']!r}"
     assert np.allclose(costs["wall_time_s_ratio_b_over_a"], 2.0)
     mismatches, costs, unmatched = compare_runs(frame, frame.iloc[1:])
-    assert unmatched == [rows[0]["run_key"]]
+    assert unmatched == [f"seed_2min rk4 kh={rows[0]['kh']!r}"]
 
 
 def test_summary_has_one_line_per_scene_and_integrator_with_the_best_error(filled):
@@ -138,7 +139,7 @@ def test_results_command_lists_exports_and_compares(filled, tmp_path, capsys):
     assert list(from_csv["run_key"]) == list(from_parquet["run_key"]) == [row["run_key"] for row in rows]
     assert from_parquet["energy_max_rel_error"].tolist() == [row["energy_max_rel_error"] for row in rows]
     assert cli_main(["results", "--db", database, "--compare", matrix_id, matrix_id]) == 0
-    assert "identical bit for bit" in capsys.readouterr().out
+    assert f"identical bit for bit in all {len(rows)} shared runs" in capsys.readouterr().out
     # a second matrix run with one value changed by one ulp: reported, exit status 1
     other_id, _ = store.start_matrix_run(MATRIX, jobs=1, scheduler=None, resume=False)
     for index, row in enumerate(rows):

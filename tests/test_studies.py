@@ -112,8 +112,8 @@ def test_stable_below_the_limit_and_blown_up_above_it(stability_table: pd.DataFr
         limit = row.stability_limit_kh
         if math.isnan(limit):
             # explicit Euler: energy grows by (1 + (kh)²) every step, whatever the step
-            growth = (1 + row.kh**2) ** STABILITY.steps - 1
-            assert row.status == "diverged" or row.energy_max_rel_error >= 0.99 * growth
+            if row.status != "diverged":
+                assert row.energy_max_rel_error >= 0.99 * ((1 + row.kh**2) ** STABILITY.steps - 1), row
         elif row.kh <= 0.95 * limit:
             # stable: bounded. Symplectic Euler's energy ratio along a stable orbit reaches
             # (1 + kh/2)/(1 − kh/2) (its conserved quadratic form), 39 at kh = 1.9; 100 leaves margin.

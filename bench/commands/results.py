@@ -56,14 +56,21 @@ def _compare(store, first: str, second: str) -> int:
 
     id_a, id_b = store.resolve_matrix_id(first), store.resolve_matrix_id(second)
     mismatches, costs, unmatched = compare_runs(store.frame(id_a), store.frame(id_b))
+    code = store.matrix_runs().set_index("matrix_id")["code_version"]
     print(f"A = {id_a}, B = {id_b}: {len(costs)} runs in both, {len(unmatched)} in only one")
+    if code[id_a] != code[id_b]:
+        print(f"note: different code versions (A {code[id_a]}, B {code[id_b]}): differences may be real changes")
+    if costs.empty:
+        print("nothing to compare: the two matrix runs share no run")
+        return 1
     ratio_columns = [column for column in costs.columns if column.endswith("_ratio_b_over_a")]
-    by_integrator = costs.groupby("integrator")[ratio_columns].median()
     print("\nmedian cost ratio B/A per integrator:")
-    print(by_integrator.to_string(float_format=lambda value: f"{value:.3g}", na_rep="–"))
+    print(costs.groupby("integrator")[ratio_columns].median().to_string(float_format=lambda value: f"{value:.3g}"))
     if mismatches.empty:
-        print("\naccuracy columns: identical bit for bit in every shared run")
+        print(f"\naccuracy columns: identical bit for bit in all {len(costs)} shared runs")
     else:
         print(f"\naccuracy columns: {len(mismatches)} MISMATCH(ES)")
         print(mismatches.to_string(index=False))
+    for run in unmatched:
+        print(f"only in one of the two: {run}")
     return 0 if mismatches.empty and not unmatched else 1

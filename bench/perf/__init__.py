@@ -1,0 +1,80 @@
+"""``foucault-bench perf``: the suite's own speed, against the hardware and the bare libraries, with targets.
+
+    foucault-bench perf                       # every section (about 10 minutes on 2 cores, see bench/PERF.md)
+    foucault-bench perf --quick               # a fast subset of every section, to try the harness
+    foucault-bench perf --only loops --only memory
+    foucault-bench perf --markdown perf.md    # also write the tables as Markdown (the figures of PERF.md)
+
+Sections (one module each; each returns target rows and a detail table):
+
+* ``loops`` (``fixed_step``): fixed-step loops against plain C loops compiled now with ``cc -O3``;
+* ``adapters``: CVODE, heyoka and solve_ivp adapters against the bare libraries;
+* ``compile`` (``compile_cache``): cold and warm compile time per integrator;
+* ``memory``: peak RSS of 10⁷- and 10⁸-step runs with streaming verdicts;
+* ``sweeps``: a latitude sweep with heyoka's batch mode and ensembles against a scalar loop;
+* ``matrices``: wall time of the quick and default matrices, cold and warm (compile once).
+
+The summary prints one line per measured figure with its target and ``met``/``missed`` (``info`` where the
+brief sets no target, ``skipped`` with the reason where it could not be measured, e.g. no C compiler). The
+exit status is 0 whether targets are met or not: the table is the result.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+import time
+from pathlib import Path
+
+from bench.perf.measure import ROW_HEADERS, Row, machine_description
+
+SECTIONS: dict[str, str] = {
+    "loops": "bench.perf.fixed_step",
+    "adapters": "bench.perf.adapters",
+    "compile": "bench.perf.compile_cache",
+    "memory": "bench.perf.memory",
+    "sweeps": "bench.perf.sweeps",
+    "matrices": "bench.perf.matrices",
+}
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--quick", action="store_true",
+                        help="a fast subset of each section (shorter runs, fewer repeats, quick matrix only)")
+    parser.add_argument("--only", action="append", choices=list(SECTIONS), metavar="SECTION",
+                        help=f"run only this section (repeatable): {', '.join(SECTIONS)}")
+    parser.add_argument("--markdown", type=Path, metavar="PATH", help="also write every table as Markdown to PATH")
+
+
+def _table(rows: list[list], headers: list[str], markdown: bool) -> str:
+    from tabulate import tabulate
+
+    return tabulate(rows, headers, tablefmt="github" if markdown else "simple", disable_numparse=True)
+
+
+def main(args: argparse.Namespace) -> int:
+    sections = args.only or list(SECTIONS)
+    machine = machine_description()
+    print("\n".join(f"{key}: {value}" for key, value in machine.items()), flush=True)
+    summary: list[Row] = []
+    markdown = ["## Machine", "", *[f"- {key}: {value}" for key, value in machine.items()], ""]
+    for name in sections:
+        started = time.perf_counter()
+        print(f"\n== {name} ==", flush=True)
+        rows, table, headers = importlib.import_module(SECTIONS[name]).run(args.quick)
+        elapsed = time.perf_counter() - started
+        if table:
+            print(_table(table, headers, markdown=False), flush=True)
+        print(f"({name}: {elapsed:.0f} s)", flush=True)
+        summary.extend(rows)
+        markdown += [f"## {name} ({elapsed:.0f} s)", "", _table(table, headers, markdown=True), ""]
+    print("\n== targets ==")
+    print(_table([row.cells() for row in summary], ROW_HEADERS, markdown=False))
+    counts = {verdict: sum(row.verdict == verdict for row in summary) for verdict in ("met", "missed", "info", "skipped")}
+    print(", ".join(f"{count} {verdict}" for verdict, count in counts.items()))
+    if args.markdown:
+        markdown += ["## Targets", "", _table([row.cells() for row in summary], ROW_HEADERS, markdown=True), ""]
+        args.markdown.write_text("\n".join(markdown))
+        print(f"tables written to {args.markdown}", file=sys.stderr)
+    return 0

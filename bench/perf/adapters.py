@@ -6,9 +6,10 @@ set up once outside the timed call as a user would. Target: adapter ≤ 1.05× t
 return the same states (checked); what remains is the adapter's own work (validation, bookkeeping, silencing
 the C libraries' output, the step guards of the scipy adapter, the copy of heyoka's compiled integrator).
 
-Also reported for CVODE: the wall time per right-hand-side evaluation of a whole solve, the cost of one
-callback from CVODE into the numba right-hand side, and the effect of the analytic Jacobian (heyoka's
-symbolic derivative, ``Model.jacobian_into``) against CVODE's internal difference quotients.
+Also reported for CVODE: the time per right-hand-side evaluation of a whole solve, the cost of one call of
+the numba right-hand side from Python, the same solve's cost per evaluation with a plain-Python oscillator
+(scikit-sundae's own per-callback cost), and the effect of the analytic Jacobian (heyoka's symbolic
+derivative, ``Model.jacobian_into``) against CVODE's internal difference quotients.
 
 Setting: the 3 m laboratory pendulum of ``bench.scenes`` (spherical model, the physical one) over
 ``DURATION_S`` with its 0.45 s output grid, tol = ``TOL``. Timed by process CPU time, interleaved rounds.
@@ -161,6 +162,25 @@ def rhs_callback_us(problem, calls: int) -> float:
     return (time.process_time() - start) / calls * 1e6
 
 
+def cvode_floor_us(problem) -> float:
+    """CPU µs per right-hand-side evaluation of CVODE (Adams, same tolerances and grid) on the harmonic oscillator
+    written in plain Python: what scikit-sundae's callback machinery costs whatever the right-hand side."""
+    from sksundae.cvode import CVODE
+
+    k2 = problem.params.pendulum_frequency_rad_s ** 2
+
+    def oscillator(t, y, yp):
+        yp[0], yp[1], yp[2], yp[3] = y[2], y[3], -k2 * y[0], -k2 * y[1]
+
+    tspan = np.union1d([0.0], problem.t_out)
+    solver_options = {"method": "Adams", "rtol": TOL, "atol": absolute_tolerance(problem.params, TOL),
+                      "max_num_steps": step_budget(problem.params, float(np.max(np.diff(tspan))))}
+    CVODE(oscillator, **solver_options).solve(tspan, problem.initial_state)
+    start = time.process_time()
+    result = CVODE(oscillator, **solver_options).solve(tspan, problem.initial_state)
+    return (time.process_time() - start) / result.nfev * 1e6
+
+
 def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
     """Time every adapter against its bare library; the target rows, a detail table and its headers."""
     problem = _scene_problem(quick)
@@ -187,6 +207,8 @@ def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
                             note=f"nfev = {solution.nfev}"))
     rows.append(Row(SECTION, "CVODE RHS callback: one Python → numba call", rhs_callback_us(problem, 20_000), "µs",
                     note="numba_rhs_into called from Python as CVODE calls it"))
+    rows.append(Row(SECTION, "CVODE floor: per evaluation of a plain-Python oscillator RHS", cvode_floor_us(problem),
+                    "µs", note="scikit-sundae's per-callback cost (arrays wrapped around CVODE's vectors)"))
     rows.extend(jacobian_effect(problem, rounds))
     return rows, table, headers
 

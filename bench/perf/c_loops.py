@@ -2,9 +2,11 @@
 
 ``compile_c_loops()`` builds ``loops.c`` with the system C compiler (``$CC`` or ``cc``) into a temporary
 directory and returns a ``CLoops`` handle, or raises ``CompilerMissing`` (the perf sections then print a
-message and skip the comparison). Flags: ``-O3 -march=native -ffp-contract=off``: the instruction set numba
-targets (the host CPU) and no fused multiply-add contraction (numba contracts none without fastmath), so the C
-loop and the numba kernel round every operation the same way and compute the same states.
+message and skip the comparison). Flags: ``-O3 -march=native -ffp-contract=off -fno-tree-vectorize``: the
+instruction set numba targets (the host CPU); no fused multiply-add contraction (numba contracts none without
+fastmath), so the C loop and the numba kernel round every operation the same way and compute the same states;
+scalar code, as the brief asks (gcc's SLP vectorizer packs the four state variables into one vector register
+and made the linear-model loops 1.3-2.6× slower on the AMD EPYC of bench/PERF.md).
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 C_SOURCE = Path(__file__).with_name("loops.c")
-C_FLAGS = ("-O3", "-march=native", "-ffp-contract=off", "-fPIC", "-shared")
+C_FLAGS = ("-O3", "-march=native", "-ffp-contract=off", "-fno-tree-vectorize", "-fPIC", "-shared")
 MODELS = ("linear", "spherical")
 SCHEMES = ("explicit_euler", "symplectic_euler", "rk4", "verlet")
 

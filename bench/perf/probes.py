@@ -1,7 +1,7 @@
 """Subprocess probes of ``foucault-bench perf``: each runs in a fresh interpreter and prints one line of JSON.
 
     python -m bench.perf.probes compile INTEGRATOR MODEL [MODEL ...]
-    python -m bench.perf.probes memory INTEGRATOR MODEL STEPS
+    python -m bench.perf.probes memory INTEGRATOR MODEL STEPS SPAN_KH
 
 ``compile``: the time to import the integrators, then per model the first ``solve`` of a short problem (JIT
 compilation or loading from the caches, plus one run) and the median of three more (the run alone); compile
@@ -9,8 +9,8 @@ time = first − median. Which caches are cold is decided by the caller's enviro
 (``bench.perf.measure.cache_environment``).
 
 ``memory``: peak resident memory (getrusage ru_maxrss) after importing and compiling, and after one
-fixed-step run of STEPS steps with streaming verdicts (``monitor=True``) over a fixed span with a fixed output
-grid of ``MEMORY_OUTPUTS`` rows, so that only the step count changes between calls.
+fixed-step run of STEPS steps with streaming verdicts (``monitor=True``) over SPAN_KH / k seconds with an
+output grid of ``MEMORY_OUTPUTS`` rows: called with the same span, only the step count changes between calls.
 """
 
 from __future__ import annotations
@@ -21,9 +21,6 @@ import sys
 import time
 
 MEMORY_OUTPUTS = 1000
-MEMORY_SPAN_KH = 1.0e6
-"""Span of the memory probe in units of 1/k: 10⁸ steps are k·h = 0.01, 10⁷ steps k·h = 0.1 (both stable for
-every fixed-step scheme on the linear model)."""
 
 PROBE_TOLERANCE = 1.0e-8
 
@@ -67,7 +64,7 @@ def compile_probe(integrator_name: str, model_names: list[str]) -> dict:
     return {"integrator": integrator_name, "import_s": import_s, "models": results}
 
 
-def memory_probe(integrator_name: str, model_name: str, steps: int) -> dict:
+def memory_probe(integrator_name: str, model_name: str, steps: int, span_kh: float) -> dict:
     import numpy as np
 
     from bench.timing import peak_rss_mb
@@ -75,7 +72,7 @@ def memory_probe(integrator_name: str, model_name: str, steps: int) -> dict:
     from models import MODELS
 
     params = _probe_parameters()
-    span = MEMORY_SPAN_KH / params.pendulum_frequency_rad_s
+    span = span_kh / params.pendulum_frequency_rad_s
     problem = Problem(MODELS[model_name], params, np.linspace(0.0, span, MEMORY_OUTPUTS + 1))
     integrator = get_integrator(integrator_name)
     integrator.compile(problem.model)
@@ -93,7 +90,7 @@ def main(argv: list[str]) -> int:
     if kind == "compile":
         result = compile_probe(arguments[0], arguments[1:])
     elif kind == "memory":
-        result = memory_probe(arguments[0], arguments[1], int(float(arguments[2])))
+        result = memory_probe(arguments[0], arguments[1], int(float(arguments[2])), float(arguments[3]))
     else:
         raise SystemExit(f"unknown probe {kind!r}: compile or memory")
     print(json.dumps(result))
