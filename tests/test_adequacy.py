@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from bench.adequacy import model_adequacy
-from bench.reference import CACHE_ENVIRONMENT_VARIABLE, reference_for
+from bench.reference import reference_for
 from bench.scenes import SCENES, Scene
 from bench.verdicts import azimuth_error_bound, rate_error_bound, rate_scale
 
@@ -17,12 +17,7 @@ COLUMNS = {"scene", "model", "simpler_model", "scene_model", "precession_rate_di
            "expected_rate_diff", "expected_trajectory_gap", "note"}
 
 
-@pytest.fixture(scope="module", autouse=True)
-def reference_cache(tmp_path_factory):
-    patch = pytest.MonkeyPatch()
-    patch.setenv(CACHE_ENVIRONMENT_VARIABLE, str(tmp_path_factory.mktemp("reference-cache")))
-    yield
-    patch.undo()
+pytestmark = pytest.mark.usefixtures("fresh_reference_cache")
 
 
 def shortened(scene: Scene, duration_s: float) -> Scene:

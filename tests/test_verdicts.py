@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from bench.reference import CACHE_ENVIRONMENT_VARIABLE, reference_for
+from bench.reference import reference_for
 from bench.scenes import SCENES, Scene
 from bench.verdicts import (
     azimuth_error_bound,
@@ -24,13 +24,7 @@ from integrators import STATUS_DIVERGED, STATUS_FAILED, Solution, get_integrator
 from models.analytic import linear_exact
 
 
-@pytest.fixture(scope="module", autouse=True)
-def reference_cache(tmp_path_factory):
-    """References of this module go to a fresh cache directory (computed here, not taken from a user's cache)."""
-    patch = pytest.MonkeyPatch()
-    patch.setenv(CACHE_ENVIRONMENT_VARIABLE, str(tmp_path_factory.mktemp("reference-cache")))
-    yield
-    patch.undo()
+pytestmark = pytest.mark.usefixtures("fresh_reference_cache")
 
 
 def shortened(scene: Scene, duration_s: float) -> Scene:

@@ -184,7 +184,7 @@ def cvode_floor_us(problem) -> float:
 def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
     """Time every adapter against its bare library; the target rows, a detail table and its headers."""
     problem = _scene_problem(quick)
-    rounds = 3 if quick else 7
+    rounds = 3 if quick else 9
     headers = ["integrator", "adapter s", "bare s", "adapter / bare", "nfev", "µs per RHS evaluation"]
     rows, table = [], []
     for name, make_bare in BARE.items():
