@@ -111,9 +111,9 @@ def jit(fn: Callable | None = None, **options) -> Dispatcher | Callable[[Callabl
     deterministic key. Use as ``@jit`` or ``@jit(inline="always")``.
 
     numba compiles a copy of ``fn`` whose qualified name ends in its fingerprint: numba names the machine code
-    after the qualified name and a per-process counter, so two closures of the same source (the loop of RK4
-    and of Verlet, the right-hand side of two models) compiled in different processes could otherwise load
-    under one symbol name into a third process, which then runs one in place of the other.
+    (and each function's environment) after the qualified name and a per-process counter and resolves them by
+    name, so two closures of the same source (RK4's loop on two models, the right-hand sides of two models)
+    compiled in different processes would otherwise load under one symbol name into a third process.
     """
     if fn is None:
         return lambda function: jit(function, **options)

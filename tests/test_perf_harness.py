@@ -74,10 +74,11 @@ def test_target_row_verdict_and_cells(value, target, verdict) -> None:
     assert cells[3] == ("–" if target is None else f"≤ {target:.3g} ×")
 
 
-def test_interleaved_times_every_contender_and_ratios_are_per_round() -> None:
-    calls = {"a": [], "b": []}
-    times = interleaved({name: (lambda name=name: calls[name].append(1)) for name in calls}, rounds=4)
-    assert [len(times["a"]), len(times["b"])] == [4, 4] and [len(calls["a"]), len(calls["b"])] == [5, 5]
+def test_interleaved_times_every_contender_in_alternating_order_and_ratios_are_per_round() -> None:
+    called: list[str] = []
+    times = interleaved({name: (lambda name=name: called.append(name)) for name in "ab"}, rounds=4)
+    assert [len(times["a"]), len(times["b"])] == [4, 4]
+    assert "".join(called) == "ab" + "ab" + "ba" + "ab" + "ba"  # warm-up, then rounds alternating the order
     assert median_ratio([2.0, 4.0, 9.0], [1.0, 1.0, 3.0]) == 3.0
 
 

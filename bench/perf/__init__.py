@@ -54,6 +54,9 @@ def _table(rows: list[list], headers: list[str], markdown: bool) -> str:
 
 
 def main(args: argparse.Namespace) -> int:
+    from bench.timing import limit_threads
+
+    limit_threads()  # one thread per native pool, as in the runner's workers (set before numpy is imported)
     sections = args.only or list(SECTIONS)
     machine = machine_description()
     print("\n".join(f"{key}: {value}" for key, value in machine.items()), flush=True)

@@ -3,11 +3,13 @@
 Timing conventions (the developers' guide: warm-up excluded, repeats, median, compile time reported apart):
 
 * ``interleaved`` calls each contender once untimed (warm-up: compilation, caches), then runs rounds in which
-  every contender is timed once, in the same order; a ratio is taken within each round and the median of the
-  per-round ratios is reported, so that a change of machine load between rounds cancels out.
-* Compute-bound loops are timed with the thread's CPU time (``time.thread_time``): on a shared machine it
-  leaves out the time the thread waits for a core, which wall-clock time would add at random. Whole
-  commands (matrix runs) are timed by wall clock, which is what a user waits for.
+  every contender is timed once, in forward order in even rounds and reverse order in odd ones (so that
+  running first or second favours nobody); a ratio is taken within each round and the median of the per-round
+  ratios is reported, so that a change of machine load between rounds cancels out.
+* Compute-bound code on one thread (loops, adapters) is timed with the thread's CPU time
+  (``time.thread_time``): on a shared machine it leaves out the time the thread waits for a core, which
+  wall-clock time would add at random. Whole commands (matrix runs) and multi-threaded work are timed by wall
+  clock, which is what a user waits for.
 * Cold and warm compilation run in subprocesses (``run_probe``), cold with fresh cache directories
   (``cache_environment``).
 """
@@ -78,12 +80,14 @@ def format_number(value: float) -> str:
 
 def interleaved(calls: dict[str, Callable[[], Any]], rounds: int,
                 clock: Callable[[], float] = time.thread_time) -> dict[str, list[float]]:
-    """Durations (s) of ``rounds`` timed calls of each contender, interleaved, after one untimed warm-up each."""
+    """Durations (s) of ``rounds`` timed calls of each contender, interleaved (alternating order), after one
+    untimed warm-up each."""
     for call in calls.values():
         call()
     durations: dict[str, list[float]] = {name: [] for name in calls}
-    for _ in range(rounds):
-        for name, call in calls.items():
+    for round_number in range(rounds):
+        order = list(calls.items())
+        for name, call in order if round_number % 2 == 0 else reversed(order):
             start = clock()
             call()
             durations[name].append(clock() - start)
