@@ -219,9 +219,8 @@ def energy_verdicts(model: Model, params: PendulumParameters, solution: Solution
     """Relative energy error (E − E₀)/E_swing on the finite part of the output grid: max, drift, streamed max.
 
     The drift is the least-squares slope (1/s) of the relative error against t. ``energy_max_rel_error_steps``
-    rescales the streamed per-step max, which the fixed-step loop normalises by |E₀| (``integrators.fixed_step``),
-    to E_swing; it is ``None`` when the integrator does not stream it. For a model that conserves no energy
-    (the seed's eqs. 4-5) the numbers mix the model's own drift with the integrator's (``energy_conserved`` = 0).
+    is the streamed per-step max, which the fixed-step loop normalises by the same E_swing; it is ``None`` when
+    the integrator does not stream it. For a model that conserves no energy (the seed's eqs. 4-5) the numbers mix the model's own drift with the integrator's (``energy_conserved`` = 0).
     """
     n = finite_prefix(solution.y)
     energy0, swing = energy_scale(model, params)
@@ -231,12 +230,11 @@ def energy_verdicts(model: Model, params: PendulumParameters, solution: Solution
     relative = (values - energy0) / swing
     drift = least_squares_slope(solution.t[:n], relative) if n >= 2 else NAN
     streamed = solution.streamed.energy_max_rel_error if solution.streamed is not None else None
-    kernel_scale = abs(energy0) if energy0 != 0.0 else 1.0  # the fixed-step loop's normaliser
     return {
         "energy_conserved": int(model.conserves_energy),
         "energy_max_rel_error": float(np.max(np.abs(relative))) if n else NAN,
         "energy_drift_per_s": drift,
-        "energy_max_rel_error_steps": None if streamed is None else float(streamed) * kernel_scale / swing,
+        "energy_max_rel_error_steps": None if streamed is None else float(streamed),
     }
 
 

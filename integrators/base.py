@@ -65,9 +65,10 @@ class StreamedMetrics:
 
     Attributes:
         turning_points: array (n, 3) of (t in s, x in m, y in m) at each maximum of the radius (t > 0).
-        energy_max_rel_error: max over all steps of |E(t) − E(0)| / |E(0)| (E from ``Model.energy``);
+        energy_max_rel_error: max over all steps of |E(t) − E(0)| / (E(0) − E_rest) (E from ``Model.energy``,
+            E_rest its value for the bob at rest at the bottom; |E(0)| if that difference is not positive);
             ``None`` where the integrator does not stream it (adaptive libraries).
-        energy_drift_per_s: least-squares slope (1/s) of (E(t) − E(0)) / |E(0)| against t over all steps;
+        energy_drift_per_s: least-squares slope (1/s) of the same relative error against t over all steps;
             ``None`` where not streamed.
     """
 

@@ -8,7 +8,7 @@ facts. Configuration (SciPy reference guide, ``scipy.integrate.solve_ivp``):
   a warning; the suite refuses such a ``tol`` instead (``ValueError``), so the tolerance in a table is the one
   used.
 * **Right-hand side.** ``Model.numba_rhs`` (t, y, p) with ``args=(p,)``; LSODA, which switches to BDF when it
-  detects stiffness, also gets ``Model.jacobian_into`` (heyoka's symbolic derivative of the model's source).
+  detects stiffness, also gets ``Model.jacobian`` (heyoka's symbolic derivative of the model's source).
 * **Output.** ``t_eval`` = the output grid (each method's dense output; the steps are not changed by it).
 * **Turning points.** ``events`` on r·ṙ = xẋ + yẏ with ``direction = −1`` (radius maxima); scipy reports
   the release point t = 0 as a root for a release from rest, which ``integrators.adaptive.turning_points``
@@ -108,16 +108,7 @@ class ScipyIvpIntegrator(AdaptiveIntegrator):
 
     def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
         model = problem.model
-        options = {}
-        if self.uses_jacobian:
-            jacobian_into = model.jacobian_into
-
-            def jacobian(t, y, p):
-                out = np.empty((4, 4))
-                jacobian_into(t, y, out, p)
-                return out
-
-            options["jac"] = jacobian
+        options = {"jac": model.jacobian} if self.uses_jacobian else {}
         monitor_steps = StepMonitor(self.max_steps or step_budget(problem.params, problem.t_end_s))
         result = solve_ivp(
             model.numba_rhs,

@@ -281,3 +281,15 @@ class Model:
             compiled(y, pars=p[:n_pars], outputs=np.reshape(out, -1, copy=False))  # raises rather than copy
 
         return jacobian_into
+
+    @functools.cached_property
+    def jacobian(self) -> Callable:
+        """``(t, y, p) -> ndarray (4, 4)``: ``jacobian_into`` returning a new array (scipy style)."""
+        jacobian_into = self.jacobian_into
+
+        def jacobian(t, y, p):
+            out = np.empty((4, 4))
+            jacobian_into(t, y, out, p)
+            return out
+
+        return jacobian

@@ -118,16 +118,7 @@ def bare_solve_ivp(problem, method: str) -> Callable[[], Any]:
     from scipy.integrate import solve_ivp
 
     model = problem.model
-    options = {}
-    if method == "LSODA":
-        jacobian_into = model.jacobian_into
-
-        def jacobian(t, y, p):
-            out = np.empty((4, 4))
-            jacobian_into(t, y, out, p)
-            return out
-
-        options["jac"] = jacobian
+    options = {"jac": model.jacobian} if method == "LSODA" else {}
     atol = absolute_tolerance(problem.params, TOL)
     p = problem.parameter_vector
     return lambda: solve_ivp(model.numba_rhs, (0.0, problem.t_end_s), problem.initial_state, method=method,

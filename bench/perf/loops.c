@@ -291,7 +291,8 @@ static void turning_point(double x0, double y0, double vx0, double vy0, double x
         double x = state0[0], y = state0[1], vx = state0[2], vy = state0[3];                                  \
         out[0] = x; out[1] = y; out[2] = vx; out[3] = vy;                                                     \
         const double energy0 = model##_energy(&k, x, y, vx, vy);                                              \
-        const double energy_scale = energy0 != 0.0 ? fabs(energy0) : 1.0;                                     \
+        const double swing = energy0 - model##_energy(&k, 0.0, 0.0, 0.0, 0.0);                               \
+        const double energy_scale = swing > 0.0 ? swing : (energy0 != 0.0 ? fabs(energy0) : 1.0);             \
         double max_rel = 0.0, count = 0.0, mean_t = 0.0, mean_e = 0.0, co_te = 0.0, var_t = 0.0;              \
         double radial = x * vx + y * vy;                                                                      \
         int64_t done = 0, found = 0, i = 0;                                                                   \
