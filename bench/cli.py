@@ -10,16 +10,16 @@ import argparse
 import importlib
 import sys
 
-from bench.errors import InputError
+from foucault_bench.bench.errors import InputError
 
 COMMANDS: dict[str, tuple[str, str]] = {
-    "run": ("bench.commands.run", "run a benchmark matrix and store one row per run"),
-    "results": ("bench.commands.results", "list, export and compare stored runs"),
-    "check": ("bench.check", "check stored or fresh results against a thresholds file (CI gate)"),
-    "perf": ("bench.perf", "measure the suite's own speed against C loops and bare libraries"),
-    "report": ("reports.build", "build the HTML/Markdown report from a results database"),
-    "seed": ("reports.seed", "reproduce and correct the seed note's figures"),
-    "simulate": ("reports.simulate", "interactive simulation (or --save an animation)"),
+    "run": ("foucault_bench.bench.commands.run", "run a benchmark matrix and store one row per run"),
+    "results": ("foucault_bench.bench.commands.results", "list, export and compare stored runs"),
+    "check": ("foucault_bench.bench.gate.check", "check stored or fresh results against a thresholds file (CI gate)"),
+    "perf": ("foucault_bench.bench.perf", "measure the suite's own speed against C loops and bare libraries"),
+    "report": ("foucault_bench.reports.build", "build the HTML/Markdown report from a results database"),
+    "seed": ("foucault_bench.reports.seed", "reproduce and correct the seed note's figures"),
+    "simulate": ("foucault_bench.reports.simulate", "interactive simulation (or --save an animation)"),
 }
 
 

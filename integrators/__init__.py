@@ -4,7 +4,7 @@ Importing this package registers the built-in integrators (one module each) and 
 under the entry-point group ``foucault_bench.integrators``. See ``integrators.base`` for the interface.
 """
 
-from integrators.base import (
+from foucault_bench.integrators.base import (
     STATUS_DIVERGED,
     STATUS_FAILED,
     STATUS_OK,
@@ -13,10 +13,10 @@ from integrators.base import (
     Solution,
     StreamedMetrics,
 )
-from integrators.fixed_step import FixedStepIntegrator
-from integrators.registry import REGISTRY, get_integrator, load_plugins, register, unregister
+from foucault_bench.integrators.fixed_step import FixedStepIntegrator
+from foucault_bench.integrators.registry import REGISTRY, get_integrator, load_plugins, register, unregister
 
-from integrators import cvode, explicit_euler, heyoka_taylor, rk4, scipy_ivp, symplectic_euler, verlet  # noqa: E402,F401  (registration)
+from foucault_bench.integrators import cvode, explicit_euler, heyoka_taylor, rk4, scipy_ivp, symplectic_euler, verlet  # noqa: E402,F401  (registration)
 
 load_plugins()
 

@@ -31,8 +31,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from integrators.base import Integrator, Problem
-from models import PendulumParameters
+from foucault_bench.integrators.base import Integrator, Problem
+from foucault_bench.models import PendulumParameters
 
 MAX_STEPS_PER_SWING_PERIOD = 100_000
 """Step budget per small-swing period 2π/k (see module docstring)."""

@@ -23,7 +23,7 @@ from typing import ClassVar, Iterator
 
 import numpy as np
 
-from models import Model, PendulumParameters
+from foucault_bench.models import Model, PendulumParameters
 
 STATUS_OK = "ok"
 STATUS_DIVERGED = "diverged"

@@ -34,9 +34,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from integrators.adaptive import AdaptiveIntegrator, absolute_tolerance, step_budget, turning_points
-from integrators.base import STATUS_FAILED, Problem, Solution, StreamedMetrics
-from integrators.registry import register
+from foucault_bench.integrators.adaptive import AdaptiveIntegrator, absolute_tolerance, step_budget, turning_points
+from foucault_bench.integrators.base import STATUS_FAILED, Problem, Solution, StreamedMetrics
+from foucault_bench.integrators.registry import register
 
 STATE_SIZE = 4
 

@@ -8,10 +8,10 @@ the seed note used; its claim that the energy error stays bounded is false for i
 
 from typing import Callable, ClassVar
 
-from integrators.fixed_step import FixedStepIntegrator
-from integrators.registry import register
-from models import Model
-from models.jit import jit
+from foucault_bench.integrators.fixed_step import FixedStepIntegrator
+from foucault_bench.integrators.registry import register
+from foucault_bench.models import Model
+from foucault_bench.models.jit import jit
 
 
 @register

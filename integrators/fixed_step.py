@@ -23,10 +23,10 @@ from typing import Callable, ClassVar
 import numpy as np
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
-from integrators.base import STATUS_DIVERGED, Integrator, Problem, Solution, StreamedMetrics
-from models import Model
-from models.jit import jit
-from models.parameters import PARAMETER_VECTOR_NAMES
+from foucault_bench.integrators.base import STATUS_DIVERGED, Integrator, Problem, Solution, StreamedMetrics
+from foucault_bench.models import Model
+from foucault_bench.models.jit import jit
+from foucault_bench.models.parameters import PARAMETER_VECTOR_NAMES
 
 PARAMETER_COUNT = len(PARAMETER_VECTOR_NAMES)
 
@@ -82,7 +82,7 @@ def build_kernel(step: Callable, energy: Callable) -> Callable:
         out[0, 2] = vx
         out[0, 3] = vy
         energy0 = energy(x, y, vx, vy, p)
-        # the swing's energy above the bob at rest at the bottom (bench.verdicts.energy_scale, the table's unit)
+        # the swing's energy above the bob at rest at the bottom (bench.verdicts.columns.energy_scale, the table's unit)
         energy_scale = energy0 - energy(0.0, 0.0, 0.0, 0.0, p)
         if not energy_scale > 0.0:
             energy_scale = abs(energy0) if energy0 != 0.0 else 1.0

@@ -50,15 +50,15 @@ from typing import ClassVar
 
 import numpy as np
 
-from integrators.adaptive import (
+from foucault_bench.integrators.adaptive import (
     AdaptiveIntegrator,
     heyoka_tolerance,
     step_budget,
     turning_points,
 )
-from integrators.base import STATUS_DIVERGED, STATUS_FAILED, Problem, Solution, StreamedMetrics
-from integrators.registry import register
-from models import Model
+from foucault_bench.integrators.base import STATUS_DIVERGED, STATUS_FAILED, Problem, Solution, StreamedMetrics
+from foucault_bench.integrators.registry import register
+from foucault_bench.models import Model
 
 REFERENCE_TOLERANCE = 1.0e-33
 """``tol`` of the quadruple-precision reference runs (real128 carries about 34 significant digits)."""

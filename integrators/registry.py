@@ -10,7 +10,7 @@ from __future__ import annotations
 from importlib.metadata import entry_points
 from typing import TypeVar
 
-from integrators.base import Integrator
+from foucault_bench.integrators.base import Integrator
 
 REGISTRY: dict[str, Integrator] = {}
 ENTRY_POINT_GROUP = "foucault_bench.integrators"

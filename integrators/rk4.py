@@ -7,10 +7,10 @@ boundary); the energy decays by about (kh)⁶/72 per step and the precession is 
 
 from typing import Callable, ClassVar
 
-from integrators.fixed_step import FixedStepIntegrator
-from integrators.registry import register
-from models import Model
-from models.jit import jit
+from foucault_bench.integrators.fixed_step import FixedStepIntegrator
+from foucault_bench.integrators.registry import register
+from foucault_bench.models import Model
+from foucault_bench.models.jit import jit
 
 TWO_SQRT_TWO = 2.8284271247461903
 

@@ -32,9 +32,9 @@ from typing import ClassVar
 import numpy as np
 from scipy.integrate import DOP853, LSODA, RK45, OdeSolver, solve_ivp
 
-from integrators.adaptive import AdaptiveIntegrator, absolute_tolerance, step_budget, turning_points
-from integrators.base import STATUS_FAILED, Problem, Solution, StreamedMetrics
-from integrators.registry import register
+from foucault_bench.integrators.adaptive import AdaptiveIntegrator, absolute_tolerance, step_budget, turning_points
+from foucault_bench.integrators.base import STATUS_FAILED, Problem, Solution, StreamedMetrics
+from foucault_bench.integrators.registry import register
 
 SCIPY_MIN_RTOL = 100.0 * np.finfo(np.float64).eps
 """Smallest rtol scipy uses as given (scipy.integrate._ivp.common.validate_tol)."""

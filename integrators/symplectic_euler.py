@@ -9,10 +9,10 @@ its error is first order either way (Euler–Cromer; Cromer, Am. J. Phys. 49, 45
 
 from typing import Callable, ClassVar
 
-from integrators.fixed_step import FixedStepIntegrator
-from integrators.registry import register
-from models import Model
-from models.jit import jit
+from foucault_bench.integrators.fixed_step import FixedStepIntegrator
+from foucault_bench.integrators.registry import register
+from foucault_bench.models import Model
+from foucault_bench.models.jit import jit
 
 
 @register

@@ -30,11 +30,11 @@ but no longer symplectic (that model has no symplectic structure to keep). 2 for
 import math
 from typing import Callable, ClassVar
 
-from integrators.fixed_step import FixedStepIntegrator
-from integrators.registry import register
-from models import Model
-from models.jit import jit
-from models.parameters import P_LENGTH, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z
+from foucault_bench.integrators.fixed_step import FixedStepIntegrator
+from foucault_bench.integrators.registry import register
+from foucault_bench.models import Model
+from foucault_bench.models.jit import jit
+from foucault_bench.models.parameters import P_LENGTH, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z
 
 
 @register

@@ -4,11 +4,11 @@ Add a model by writing a module with a ``free_force`` and an ``energy`` source a
 listing it here; every integrator then runs it.
 """
 
-from models.base import STATE_NAMES, Model
-from models.linear import MODEL as LINEAR
-from models.parameters import SIDEREAL_EARTH_RATE_RAD_S, PendulumParameters
-from models.seed_planar import MODEL as SEED_PLANAR
-from models.spherical import MODEL as SPHERICAL
+from foucault_bench.models.base import STATE_NAMES, Model
+from foucault_bench.models.linear import MODEL as LINEAR
+from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S, PendulumParameters
+from foucault_bench.models.seed_planar import MODEL as SEED_PLANAR
+from foucault_bench.models.spherical import MODEL as SPHERICAL
 
 MODELS: dict[str, Model] = {model.name: model for model in (LINEAR, SEED_PLANAR, SPHERICAL)}
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from models.parameters import PendulumParameters
+from foucault_bench.models.parameters import PendulumParameters
 
 
 def _release(params: PendulumParameters) -> complex:

@@ -33,8 +33,8 @@ from typing import Callable
 
 import numpy as np
 
-from models.jit import jit, jitable
-from models.parameters import P_LENGTH, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z, PARAMETER_VECTOR_NAMES
+from foucault_bench.models.jit import jit, jitable
+from foucault_bench.models.parameters import P_LENGTH, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z, PARAMETER_VECTOR_NAMES
 
 STATE_NAMES = ("x", "y", "vx", "vy")
 """Every model's state: horizontal position (m) and velocity (m/s) in the rotating (South, East, Up) frame."""

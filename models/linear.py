@@ -7,8 +7,8 @@ PHYSICS.md "Models" 1. Frame x South, y East, z Up. The Coriolis force does no w
 E = ½(ẋ² + ẏ²) + ½k²(x² + y²) is conserved exactly; the exact solution is in ``models.analytic``.
 """
 
-from models.base import Model
-from models.parameters import P_K2, P_OMEGA_Z
+from foucault_bench.models.base import Model
+from foucault_bench.models.parameters import P_K2, P_OMEGA_Z
 
 
 def free_force(m, x, y, z, vx, vy, vz, p):

@@ -14,8 +14,8 @@ which the suite reports as a drift of the model, not of the integrator. In our p
 ω_x = −Ω_E cos φ, so the tension coefficient is written −2ω_x / L.
 """
 
-from models.base import Model
-from models.parameters import P_K2, P_LENGTH, P_OMEGA_X, P_OMEGA_Z
+from foucault_bench.models.base import Model
+from foucault_bench.models.parameters import P_K2, P_LENGTH, P_OMEGA_X, P_OMEGA_Z
 
 
 def free_force(m, x, y, z, vx, vy, vz, p):

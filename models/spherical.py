@@ -13,8 +13,8 @@ is conserved exactly. Source: PHYSICS.md "Models" 4 (d'Alembert's principle for 
 rotating frame; e.g. Goldstein, Classical Mechanics, 3rd ed., §4.10 for the fictitious forces).
 """
 
-from models.base import Model, sphere_height
-from models.parameters import P_CENTRIFUGAL, P_GRAVITY, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z
+from foucault_bench.models.base import Model, sphere_height
+from foucault_bench.models.parameters import P_CENTRIFUGAL, P_GRAVITY, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z
 
 
 def free_force(m, x, y, z, vx, vy, vz, p):

@@ -4,7 +4,7 @@
 
 The folder opens in a browser with no server: index.html and REPORT.md hold the same blocks
 (``reports.document``), figures are PNG + SVG files under ``figures/``, tables are embedded and written under
-``tables/`` as CSV, Markdown, LaTeX and HTML. The study tables (``bench.studies``) are read from the database
+``tables/`` as CSV, Markdown, LaTeX and HTML. The study tables (``reports.studies``) are read from the database
 and computed (then stored) when missing, or recomputed with ``--studies recompute``; ``--studies skip`` leaves
 their sections out. The seed note's figures (``reports.seed``) are a section of the report.
 
@@ -23,15 +23,15 @@ from typing import Callable
 import pandas as pd
 from tqdm import tqdm
 
-from bench.errors import InputError
-from bench.schema import COLUMN_NAMES
-from bench.store import DEFAULT_DB, ResultsStore
-from bench.studies import STUDIES, ensure_studies
-from integrators import STATUS_OK
-from models.parameters import SIDEREAL_EARTH_RATE_RAD_S
-from reports import charts, tables
-from reports.document import Block, Figure, Heading, Paragraph, Table, write_document, write_table_files
-from reports.seed import seed_blocks
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.schema import COLUMN_NAMES
+from foucault_bench.bench.run.store import DEFAULT_DB, ResultsStore
+from foucault_bench.reports.studies import STUDIES, ensure_studies
+from foucault_bench.integrators import STATUS_OK
+from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
+from foucault_bench.reports import charts, tables
+from foucault_bench.reports.document import Block, Figure, Heading, Paragraph, Table, write_document, write_table_files
+from foucault_bench.reports.seed import seed_blocks
 
 DEFAULT_OUT = Path("results") / "report"
 FIGURES = "figures"
@@ -44,7 +44,7 @@ class ReportInputs:
 
     Attributes:
         runs: results rows (columns of ``bench.schema``).
-        studies: study name (``bench.studies.STUDIES``) → its table; missing names leave their section out.
+        studies: study name (``reports.studies.STUDIES``) → its table; missing names leave their section out.
         adequacy: rows of the ``adequacy`` table (scene, model, simpler_model, precession_rate_diff,
             trajectory_gap, note), possibly empty.
         provenance: label → value lines shown at the top (matrix id, host, commit, ...).
@@ -140,7 +140,7 @@ def _convergence(builder: _Builder, runs: pd.DataFrame) -> None:
     orders = tables.convergence_orders(runs)
     builder.add(Heading("Convergence"), Paragraph(
         "Reference error against step size for the fixed-step integrators; the fitted order "
-        "(bench.verdicts.observed_order: least-squares slope over the finest steps, after dropping saturated "
+        "(bench.verdicts.convergence.observed_order: least-squares slope over the finest steps, after dropping saturated "
         "errors above 0.1 and round-off-dominated points) is in the legend and in the table next to the "
         "declared order."))
     builder.table(orders, "convergence_orders", "Observed and declared orders of convergence")
@@ -157,7 +157,7 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
         first = energy.iloc[0]
         builder.add(Heading("Long-time energy"), Paragraph(
             f"Relative energy error (E − E₀)/E_swing against time over {first['config_duration_s'] / 3600:g} h, "
-            "one representative per family (study `study_long_time_energy`, bench.studies.long_time_energy). "
+            "one representative per family (study `study_long_time_energy`, reports.studies.long_time_energy). "
             "Expected: explicit Euler grows as (1 + (kh)²)ⁿ until it diverges, RK4 drifts linearly, Verlet stays "
             "bounded near (kh)²/4, CVODE and heyoka stay near round-off at tight tolerances. "
             f"Values below {charts.LOG_FLOOR:g} (exact zeros included) are drawn at {charts.LOG_FLOOR:g}."))
@@ -197,7 +197,7 @@ def _adequacy(builder: _Builder, adequacy: pd.DataFrame) -> None:
         return
     builder.add(Paragraph(
         "Per scene, what each simpler model gets wrong compared with the scene's model "
-        "(bench.adequacy.model_adequacy)."))
+        "(bench.problems.adequacy.model_adequacy)."))
     builder.figure(charts.adequacy, "model_adequacy", "Model adequacy per scene (log scale).", adequacy)
     builder.table(adequacy, "model_adequacy", "Model adequacy per scene", tables.ADEQUACY_NOTES)
 
@@ -205,7 +205,7 @@ def _adequacy(builder: _Builder, adequacy: pd.DataFrame) -> None:
 def _all_runs(builder: _Builder, runs: pd.DataFrame) -> None:
     builder.add(Heading("All runs"), Paragraph(
         "One row per run with the main columns; the linked files of the second table hold every column of "
-        "bench.schema."))
+        "foucault_bench.bench.schema."))
     builder.table(tables.compact_table(runs), "runs_compact", "All runs (main columns)")
     full = tables.full_table(runs)
     write_table_files(full, builder.folder, f"{TABLES}/runs_full", "All runs, every column", tables.INTEGER_COLUMNS)

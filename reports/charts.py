@@ -1,5 +1,5 @@
 """The report's charts: each function reads plain DataFrames (results rows or study tables) and writes one
-figure as PNG and SVG. Nothing here computes a result; ``bench.studies`` and ``reports.tables`` do.
+figure as PNG and SVG. Nothing here computes a result; ``reports.studies`` and ``reports.tables`` do.
 
 Conventions shared by every chart:
 
@@ -26,9 +26,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
-from integrators.registry import REGISTRY
-from models.parameters import SIDEREAL_EARTH_RATE_RAD_S
+from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
+from foucault_bench.integrators.registry import REGISTRY
+from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
 
 FAMILY_COLOURS: dict[str, str] = {
     "euler": "#d62728",
@@ -346,7 +346,7 @@ def precession_latitude(table: pd.DataFrame, stem: Path) -> Path:
 
 
 def adequacy(table: pd.DataFrame, stem: Path) -> Path:
-    """Per scene, what each simpler model gets wrong against the richer one (``bench.adequacy``): |precession
+    """Per scene, what each simpler model gets wrong against the richer one (``bench.problems.adequacy``): |precession
     rate difference| in units of Ω_E|sin φ| and trajectory gap in units of A, measured (filled) next to the
     leading-order expectation (hollow) where the physics gives one; dot plot on log axes."""
     rows = table.reset_index(drop=True)

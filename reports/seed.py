@@ -6,7 +6,7 @@ The seed note (shared/seed, Spanish) shows four figures: the first 2 minutes of 
 solution (eqs. 14-15, ω = 2π/24 h), its Euler solution of eqs. 4-5, that solution's relative energy error, and
 the numeric-minus-analytic difference. Each is redrawn here as the seed made it (with stated assumptions where the
 note gives no numbers) beside a corrected figure, and followed by one paragraph saying which claim holds and
-which does not, with numbers. The computations are ``bench.studies.seed_revisited`` (the suite's integrators
+which does not, with numbers. The computations are ``reports.studies.seed_revisited`` (the suite's integrators
 and ``models.analytic``); this module only plots and writes. ``seed_blocks`` is also the report's section.
 """
 
@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure as MplFigure
 
-from bench.errors import InputError
-from bench.studies import SeedStudy, seed_revisited
-from reports.charts import integrator_style, save
-from reports.document import Block, Figure, Heading, Paragraph, write_document
+from foucault_bench.bench.errors import InputError
+from foucault_bench.reports.studies import SeedStudy, seed_revisited
+from foucault_bench.reports.charts import integrator_style, save
+from foucault_bench.reports.document import Block, Figure, Heading, Paragraph, write_document
 
 DEFAULT_OUT = Path("results") / "seed"
 GREY = "#7f7f7f"
@@ -237,7 +237,7 @@ def seed_blocks(folder: Path, prefix: str) -> list[Block]:
             f"latitude {c.latitude_deg:g}° (the seed's colatitude λ = {90 - c.latitude_deg:g}°), release from rest "
             f"at y = y₀, explicit Euler with h = {c.euler_step_s * 1e3:g} ms, and RK4 with h = "
             f"{c.reference_step_s * 1e3:g} ms on the same equations as their reference. Each figure: left, as the "
-            "seed made it; right, corrected. Computed by bench.studies.seed_revisited with the suite's integrators "
+            "seed made it; right, corrected. Computed by reports.studies.seed_revisited with the suite's integrators "
             "and models.analytic."),
     ]
     for name, draw, caption in (

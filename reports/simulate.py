@@ -10,7 +10,7 @@ the exact solution of the linear model (``models.analytic.linear_exact``); the r
 plane's expected direction at the end, ψ₀ − ω sin φ · t (PHYSICS.md "Frames"), are drawn through the centre.
 Sliders set Earth's rate (in multiples of the sidereal Ω_E, so that the precession shows within a few
 swings), the latitude, the string length and the amplitude. The readout gives the precession rate measured on
-the numeric solution's turning points (``bench.verdicts.turning_points_from_grid`` and ``precession_rate``,
+the numeric solution's turning points (``bench.verdicts.turning_points.turning_points_from_grid`` and ``precession_rate``,
 the procedure of the results table) against the textbook −ω sin φ, in degrees per hour, counter-clockwise
 positive.
 
@@ -31,14 +31,14 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from bench.errors import InputError
-from bench.verdicts import grid_accelerations, precession_rate, turning_points_from_grid
-from integrators import STATUS_OK, Problem, get_integrator
-from integrators.registry import REGISTRY
-from models import MODELS, PendulumParameters, get_model
-from models.analytic import linear_exact
-from models.parameters import SIDEREAL_EARTH_RATE_RAD_S
-from reports.charts import integrator_style
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
+from foucault_bench.integrators import STATUS_OK, Problem, get_integrator
+from foucault_bench.integrators.registry import REGISTRY
+from foucault_bench.models import MODELS, PendulumParameters, get_model
+from foucault_bench.models.analytic import linear_exact
+from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
+from foucault_bench.reports.charts import integrator_style
 
 DEGREES_PER_HOUR_PER_RAD_S = math.degrees(1.0) * 3600.0
 OUTPUT_POINTS_PER_PERIOD = 16

@@ -5,7 +5,7 @@
 * ``shootout``: per scene, integrators ranked by efficiency = 1 / (reference error × wall time), best setting
   of each.
 * ``convergence_orders``: the observed order of each fixed-step integrator per scene
-  (``bench.verdicts.observed_order``) next to its declared order.
+  (``bench.verdicts.convergence.observed_order``) next to its declared order.
 * ``compact_table`` / ``full_table``: the tidy results, a readable subset and every column.
 
 Every table keeps a row for every integrator present in the results, with the counts of ok, diverged and
@@ -18,11 +18,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from bench.schema import COLUMN_NAMES, COLUMNS
-from bench.store import setting_label
-from bench.verdicts import observed_order
-from integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
-from integrators.registry import REGISTRY
+from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS
+from foucault_bench.bench.run.store import setting_label
+from foucault_bench.bench.verdicts.convergence import observed_order
+from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
+from foucault_bench.integrators.registry import REGISTRY
 
 MATCHED_ACCURACY_TARGET = 1e-6
 """Reference error (max |r − r_ref| / A) a setting must reach to count in the matched-accuracy summary."""
@@ -49,7 +49,7 @@ DERIVED_NOTES: dict[str, str] = {
     "stability_limit_kh": "largest stable k·h the integrator declares (empty: unstable for every h)",
     "first_diverged_kh": "smallest k·h of the sweep whose run diverged within the sweep's steps",
     "largest_kh_not_diverged": "largest k·h of the sweep below first_diverged_kh",
-    "simpler_model": "the simpler model of the pair (bench.adequacy)",
+    "simpler_model": "the simpler model of the pair (bench.problems.adequacy)",
     "scene_model": "the scene's own model",
     "precession_rate_diff": "(rate of simpler − rate of richer model) / (Ω_E|sin φ|), signed",
     "trajectory_gap": "max over the grid of |r_simpler − r_richer| / A",
@@ -71,9 +71,9 @@ COMPACT_COLUMNS: tuple[str, ...] = (
 
 ADEQUACY_NOTES: dict[str, str] = {
     "model": "the richer model of the pair",
-    "note": "remark of bench.adequacy on this pair",
+    "note": "remark of bench.problems.adequacy on this pair",
 }
-"""Meanings that differ in the adequacy table (``bench.adequacy.model_adequacy``)."""
+"""Meanings that differ in the adequacy table (``bench.problems.adequacy.model_adequacy``)."""
 
 
 def notes_for(frame: pd.DataFrame, overrides: dict[str, str] | None = None) -> dict[str, str]:
@@ -147,7 +147,7 @@ def shootout(frame: pd.DataFrame) -> pd.DataFrame:
 
 def convergence_orders(frame: pd.DataFrame) -> pd.DataFrame:
     """Per (scene, integrator): declared order and the order fitted on the ok fixed-step runs' reference error
-    against step size (``bench.verdicts.observed_order``; needs two or more distinct steps)."""
+    against step size (``bench.verdicts.convergence.observed_order``; needs two or more distinct steps)."""
     rows = []
     for (scene, integrator), group in _groups(frame):
         registered = REGISTRY.get(integrator)

@@ -18,10 +18,10 @@ from typing import Callable, ClassVar
 
 from numba import njit
 
-from integrators.fixed_step import FixedStepIntegrator
-from integrators.registry import register
-from integrators.rk4 import RK4
-from models import Model
+from foucault_bench.integrators.fixed_step import FixedStepIntegrator
+from foucault_bench.integrators.registry import register
+from foucault_bench.integrators.rk4 import RK4
+from foucault_bench.models import Model
 
 MUTANT_NAMES = ("rk4_wrong_weights", "verlet_naive_coriolis")
 

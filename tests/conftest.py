@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from bench.reference import CACHE_ENVIRONMENT_VARIABLE
+from foucault_bench.bench.problems.reference import CACHE_ENVIRONMENT_VARIABLE
 
 
 @pytest.fixture(scope="module")

@@ -23,14 +23,14 @@ import sys
 import numpy as np
 import pytest
 
-from integrators import REGISTRY, Problem, Solution, get_integrator
-from integrators.adaptive import state_scale
-from integrators.cvode import CvodeAdams, CvodeBdf, CvodeIntegrator
-from integrators.heyoka_taylor import REFERENCE_TOLERANCE, HeyokaTaylor, HeyokaTaylorQuad, _compiled_template
-from integrators.scipy_ivp import ScipyDop853, ScipyLsoda, ScipyRk45
-from models import MODELS, Model, PendulumParameters
-from models.analytic import linear_exact, textbook_turning_azimuth
-from models.parameters import P_K2, P_LENGTH
+from foucault_bench.integrators import REGISTRY, Problem, Solution, get_integrator
+from foucault_bench.integrators.adaptive import state_scale
+from foucault_bench.integrators.cvode import CvodeAdams, CvodeBdf, CvodeIntegrator
+from foucault_bench.integrators.heyoka_taylor import REFERENCE_TOLERANCE, HeyokaTaylor, HeyokaTaylorQuad, _compiled_template
+from foucault_bench.integrators.scipy_ivp import ScipyDop853, ScipyLsoda, ScipyRk45
+from foucault_bench.models import MODELS, Model, PendulumParameters
+from foucault_bench.models.analytic import linear_exact, textbook_turning_azimuth
+from foucault_bench.models.parameters import P_K2, P_LENGTH
 
 ADAPTIVE = sorted(name for name, integrator in REGISTRY.items() if integrator.adaptive)
 SCENE = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)

@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from models import PendulumParameters
-from models.analytic import linear_exact, seed_approximate, seed_gap_bound, textbook_turning_azimuth
+from foucault_bench.models import PendulumParameters
+from foucault_bench.models.analytic import linear_exact, seed_approximate, seed_gap_bound, textbook_turning_azimuth
 
 PANTHEON = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
 SIDEREAL_DAY_S = 86164.0905

@@ -1,4 +1,4 @@
-"""Tests of the CI gate ``foucault-bench check`` (bench/check.py) and its shipped thresholds.
+"""Tests of the CI gate ``foucault-bench check`` (bench/gate/check.py) and its shipped thresholds.
 
 What they prove:
 
@@ -30,7 +30,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from bench.check import (
+from foucault_bench.bench.gate.check import (
     ERROR_COLUMNS,
     evaluate,
     headroom,
@@ -39,10 +39,10 @@ from bench.check import (
     render,
     validate_against,
 )
-from bench.cli import main
-from bench.errors import InputError
-from bench.schema import COLUMN_NAMES
-from integrators import REGISTRY, unregister
+from foucault_bench.bench.cli import main
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.schema import COLUMN_NAMES
+from foucault_bench.integrators import REGISTRY, unregister
 
 TESTS = Path(__file__).resolve().parent
 ROOT = TESTS.parent
@@ -233,7 +233,7 @@ def test_documented_example_is_a_valid_thresholds_file():
     examples = [block for text in texts for block in re.findall(r"```toml\n(# thresholds example.*?)```", text, re.S)]
     assert examples, "the README's complete thresholds example is missing"
     thresholds = parse_thresholds(tomllib.loads(examples[0]), source="README example")
-    from bench.scenes import SCENES
+    from foucault_bench.bench.problems.scenes import SCENES
 
     for bound in thresholds.bounds:
         assert set(bound.selection.scenes) <= set(SCENES)

@@ -15,12 +15,12 @@ from pathlib import Path
 
 import pytest
 
-import bench.runner
+import foucault_bench.bench.run.runner as runner_module
 
-from bench.cli import main as cli_main
-from bench.matrix import load_matrix
-from bench.runner import run_matrix
-from bench.store import ResultsStore, compare_runs
+from foucault_bench.bench.cli import main as cli_main
+from foucault_bench.bench.run.matrix import load_matrix
+from foucault_bench.bench.run.runner import run_matrix
+from foucault_bench.bench.run.store import ResultsStore, compare_runs
 
 STARTUP_TIMEOUT_S = 60.0
 
@@ -103,7 +103,7 @@ def test_dask_and_local_runs_agree_bit_for_bit(tmp_path, dask_scheduler, capsys)
 
 
 def test_an_unreachable_scheduler_is_an_input_error(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(bench.runner, "DASK_CONNECT_TIMEOUT_S", 1.0)  # nothing listens on the discard port
+    monkeypatch.setattr(runner_module, "DASK_CONNECT_TIMEOUT_S", 1.0)  # nothing listens on the discard port
     matrix_path = tmp_path / "tiny.toml"
     matrix_path.write_text(textwrap.dedent(TINY), encoding="utf-8")
     database = tmp_path / "none.sqlite"

@@ -12,9 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from integrators import REGISTRY, FixedStepIntegrator, Problem, get_integrator
-from models import MODELS, PendulumParameters
-from models.analytic import linear_exact
+from foucault_bench.integrators import REGISTRY, FixedStepIntegrator, Problem, get_integrator
+from foucault_bench.models import MODELS, PendulumParameters
+from foucault_bench.models.analytic import linear_exact
 
 FIXED_STEP = sorted(name for name, integ in REGISTRY.items() if isinstance(integ, FixedStepIntegrator))
 PARIS = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)

@@ -14,8 +14,8 @@ import heyoka
 import numpy as np
 import pytest
 
-from models import MODELS, Model, PendulumParameters
-from models.parameters import P_K2, P_LENGTH
+from foucault_bench.models import MODELS, Model, PendulumParameters
+from foucault_bench.models.parameters import P_K2, P_LENGTH
 
 N_SAMPLES = 1200
 LATITUDES_DEG = (-90.0, -48.846, -10.0, 0.0, 30.0, 48.846, 90.0)

@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from bench.cli import main as cli_main
-from bench.matrix import built_in_matrices, load_matrix, parse_matrix
-from bench.scenes import SCENES
-from integrators import REGISTRY
+from foucault_bench.bench.cli import main as cli_main
+from foucault_bench.bench.run.matrix import built_in_matrices, load_matrix, parse_matrix
+from foucault_bench.bench.problems.scenes import SCENES
+from foucault_bench.integrators import REGISTRY
 
 VALID = """
 scenes = ["seed_2min"]

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from models import PendulumParameters
+from foucault_bench.models import PendulumParameters
 
 GOOD = dict(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
 

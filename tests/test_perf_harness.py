@@ -17,9 +17,9 @@ import sys
 import numpy as np
 import pytest
 
-from bench.perf.c_loops import MODELS, SCHEMES, CompilerMissing, compile_c_loops
-from bench.perf.fixed_step import LoopPair
-from bench.perf.measure import Row, interleaved, median_ratio, run_probe
+from foucault_bench.bench.perf.c_loops import MODELS, SCHEMES, CompilerMissing, compile_c_loops
+from foucault_bench.bench.perf.fixed_step import LoopPair
+from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio, run_probe
 
 
 @pytest.fixture(scope="module")
@@ -84,8 +84,8 @@ def test_interleaved_times_every_contender_in_alternating_order_and_ratios_are_p
 
 KEY_SCRIPT = """
 import numpy as np
-from models import MODELS
-from models.jit import _FingerprintCache
+from foucault_bench.models import MODELS
+from foucault_bench.models.jit import _FingerprintCache
 from numba.core.registry import cpu_target
 codegen = cpu_target.target_context.codegen()
 for name in ("linear", "spherical"):
@@ -104,18 +104,18 @@ def test_jit_cache_key_is_the_same_in_every_process_and_differs_between_models()
 
 COMPILE_SCRIPT = """
 import sys
-from integrators import get_integrator
-from models import MODELS
+from foucault_bench.integrators import get_integrator
+from foucault_bench.models import MODELS
 scheme, model = sys.argv[1].split("/")
 get_integrator(scheme).compile(MODELS[model])
 """
 
 CHECK_SCRIPT = """
 import sys
-from bench.perf.c_loops import compile_c_loops
-from bench.perf.fixed_step import LoopPair
-from integrators import get_integrator
-from models import MODELS
+from foucault_bench.bench.perf.c_loops import compile_c_loops
+from foucault_bench.bench.perf.fixed_step import LoopPair
+from foucault_bench.integrators import get_integrator
+from foucault_bench.models import MODELS
 c_loops = compile_c_loops()
 for pair in sys.argv[1:]:
     scheme, model = pair.split("/")
@@ -135,7 +135,7 @@ def test_loops_compiled_in_different_processes_load_together_correctly(c_loops, 
 
 
 def test_cache_entries_are_stored_in_files_named_after_their_keys(tmp_path) -> None:
-    from models.jit import _KeyedDataCacheFile
+    from foucault_bench.models.jit import _KeyedDataCacheFile
 
     cache_file = _KeyedDataCacheFile(cache_path=str(tmp_path), filename_base="f-1.py311", source_stamp=(1.0, 2))
     cache_file.save(("sig a", "cpu"), "code a")

@@ -16,10 +16,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from integrators import Problem, get_integrator
-from integrators.heyoka_taylor import REFERENCE_TOLERANCE
-from models import MODELS, PendulumParameters
-from models.analytic import linear_exact
+from foucault_bench.integrators import Problem, get_integrator
+from foucault_bench.integrators.heyoka_taylor import REFERENCE_TOLERANCE
+from foucault_bench.models import MODELS, PendulumParameters
+from foucault_bench.models.analytic import linear_exact
 
 EPS = float(np.finfo(np.float64).eps)
 SIDEREAL_DAY_S = 86164.0

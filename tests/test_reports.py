@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bench.schema import COLUMN_NAMES
-from bench.studies import (
+from foucault_bench.bench.schema import COLUMN_NAMES
+from foucault_bench.reports.studies import (
     LongTimeEnergyConfig,
     PrecessionLatitudeConfig,
     StabilitySweepConfig,
@@ -21,8 +21,8 @@ from bench.studies import (
     precession_vs_latitude,
     stability_sweep,
 )
-from reports import tables
-from reports.build import ReportInputs, build_report
+from foucault_bench.reports import tables
+from foucault_bench.reports.build import ReportInputs, build_report
 
 FIXED_STEP_ORDERS = {"rk4": 4, "verlet": 2, "explicit_euler": 1}
 FAMILIES = {"rk4": "runge-kutta", "verlet": "verlet", "explicit_euler": "euler", "cvode_adams": "multistep",
@@ -208,7 +208,7 @@ def test_fitted_orders_recover_the_fixture_orders() -> None:
 
 
 def test_report_refuses_results_without_the_schema_columns(tmp_path: Path) -> None:
-    from bench.errors import InputError
+    from foucault_bench.bench.errors import InputError
 
     with pytest.raises(InputError, match="reference_error"):
         build_report(ReportInputs(runs=results_fixture().drop(columns=["reference_error"]), include_seed=False),
@@ -216,11 +216,11 @@ def test_report_refuses_results_without_the_schema_columns(tmp_path: Path) -> No
 
 
 def test_report_command_reads_the_results_database(tmp_path: Path, monkeypatch) -> None:
-    import reports.build
-    from bench.cli import main as cli_main
-    from bench.matrix import Matrix
-    from bench.store import ResultsStore
-    from bench.timing import TimingPolicy
+    import foucault_bench.reports.build as build_module
+    from foucault_bench.bench.cli import main as cli_main
+    from foucault_bench.bench.run.matrix import Matrix
+    from foucault_bench.bench.run.store import ResultsStore
+    from foucault_bench.bench.run.timing import TimingPolicy
 
     database = tmp_path / "results.sqlite"
     matrix = Matrix(name="fixture", description="report test", source="tests/test_reports.py", scenes=(), runs=(),
@@ -234,7 +234,7 @@ def test_report_command_reads_the_results_database(tmp_path: Path, monkeypatch) 
         store.write_adequacy(matrix_id, "lab", adequacy_fixture().query("scene == 'lab'").drop(columns="scene")
                              .to_dict("records"))
         store.finish_matrix_run(matrix_id)
-    monkeypatch.setattr(reports.build, "seed_blocks", lambda folder, prefix: [])  # tested in test_seed.py
+    monkeypatch.setattr(build_module, "seed_blocks", lambda folder, prefix: [])  # tested in test_seed.py
     out = tmp_path / "report"
     assert cli_main(["report", "--db", str(database), "--out", str(out), "--studies", "skip"]) == 0
     markdown = (out / "REPORT.md").read_text(encoding="utf-8")
@@ -245,14 +245,14 @@ def test_report_command_reads_the_results_database(tmp_path: Path, monkeypatch) 
 
 
 def test_report_command_without_a_database_is_a_clear_error(tmp_path: Path, capsys) -> None:
-    from bench.cli import main as cli_main
+    from foucault_bench.bench.cli import main as cli_main
 
     assert cli_main(["report", "--db", str(tmp_path / "missing.sqlite"), "--out", str(tmp_path / "r")]) == 2
     assert "no results database" in capsys.readouterr().err
 
 
 def test_a_scene_where_every_run_failed_still_draws_and_tabulates(tmp_path: Path) -> None:
-    from reports import charts
+    from foucault_bench.reports import charts
 
     runs = results_fixture()
     failed = runs[(runs["scene"] == "lab") & (runs["integrator"] == "scipy_lsoda")]

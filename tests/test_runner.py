@@ -15,20 +15,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench.cli import main as cli_main
-from bench.matrix import code_version, load_matrix
-from bench.runner import WORKER_DIED, run_matrix
-from bench.schema import COLUMN_NAMES
-from bench.store import ResultsStore
-from integrators import unregister
+from foucault_bench.bench.cli import main as cli_main
+from foucault_bench.bench.run.matrix import code_version, load_matrix
+from foucault_bench.bench.run.runner import WORKER_DIED, run_matrix
+from foucault_bench.bench.schema import COLUMN_NAMES
+from foucault_bench.bench.run.store import ResultsStore
+from foucault_bench.integrators import unregister
 
 PLUGIN = '''
 """Test-only integrators that fail in three ways (registered when imported)."""
 import os
 from typing import ClassVar
 
-from integrators import register
-from integrators.adaptive import AdaptiveIntegrator
+from foucault_bench.integrators import register
+from foucault_bench.integrators.adaptive import AdaptiveIntegrator
 
 
 class _Base(AdaptiveIntegrator):
@@ -174,7 +174,7 @@ def test_resume_after_a_killed_run_loses_and_duplicates_nothing(tmp_path):
         """)
     database = tmp_path / "resume.sqlite"
     sources_before = code_version.__wrapped__()
-    command = [sys.executable, "-m", "bench.cli", "run", "--matrix", str(matrix_path), "--db", str(database),
+    command = [sys.executable, "-m", "foucault_bench.bench.cli", "run", "--matrix", str(matrix_path), "--db", str(database),
                "--jobs", "1", "--no-progress"]
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                start_new_session=True)

@@ -10,11 +10,11 @@ import time
 import numpy as np
 import pytest
 
-import bench.reference as reference_module
-from bench.errors import InputError
-from bench.reference import CACHE_ENVIRONMENT_VARIABLE, cache_directory, load_cached, reference_for, reference_key
-from bench.scenes import MIN_OUTPUT_INTERVALS_PER_PERIOD, SCENES, scene_from_mapping
-from models import MODELS
+import foucault_bench.bench.problems.reference as reference_module
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.problems.reference import CACHE_ENVIRONMENT_VARIABLE, cache_directory, load_cached, reference_for, reference_key
+from foucault_bench.bench.problems.scenes import MIN_OUTPUT_INTERVALS_PER_PERIOD, SCENES, scene_from_mapping
+from foucault_bench.models import MODELS
 
 REAL_PENDULUMS = ("pantheon", "un_headquarters", "griffith", "south_pole", "lab_3m")
 
@@ -154,8 +154,8 @@ def test_concurrent_requests_compute_a_reference_once(cache, monkeypatch) -> Non
 
 
 def test_a_reference_that_cannot_finish_is_an_error_and_is_not_cached(cache, monkeypatch) -> None:
-    from integrators import Solution
-    from integrators.heyoka_taylor import HeyokaTaylorQuad
+    from foucault_bench.integrators import Solution
+    from foucault_bench.integrators.heyoka_taylor import HeyokaTaylorQuad
 
     def failing(self, problem, **kwargs):
         return Solution.failure(problem.t_out, "step limit reached")

@@ -1,4 +1,4 @@
-"""The seed note revisited (bench.studies.seed_revisited, reports.seed): the numbers behind each finding follow
+"""The seed note revisited (reports.studies.seed_revisited, reports.seed): the numbers behind each finding follow
 from the theory quoted in the finding, and `foucault-bench seed` writes its figures and text."""
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench.cli import main as cli_main
-from bench.studies import SeedStudy, seed_revisited
-from models.parameters import SIDEREAL_EARTH_RATE_RAD_S
+from foucault_bench.bench.cli import main as cli_main
+from foucault_bench.reports.studies import SeedStudy, seed_revisited
+from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
 
 
 @pytest.fixture(scope="module")
@@ -101,9 +101,9 @@ def test_solar_day_and_centrifugal_slip(study: SeedStudy) -> None:
 
 
 def test_seed_command_writes_figures_and_findings(tmp_path: Path, study: SeedStudy, monkeypatch) -> None:
-    import reports.seed
+    import foucault_bench.reports.seed as seed_module
 
-    monkeypatch.setattr(reports.seed, "seed_revisited", lambda: study)  # computed once, by the fixture
+    monkeypatch.setattr(seed_module, "seed_revisited", lambda: study)  # computed once, by the fixture
     assert cli_main(["seed", "--out", str(tmp_path)]) == 0
     for name in ("trajectory", "euler", "energy", "difference"):
         for suffix in ("png", "svg"):

@@ -9,10 +9,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bench.cli import main as cli_main
-from bench.matrix import parse_matrix
-from bench.schema import COLUMN_NAMES
-from bench.store import ResultsStore, compare_runs, summarize
+from foucault_bench.bench.cli import main as cli_main
+from foucault_bench.bench.run.matrix import parse_matrix
+from foucault_bench.bench.schema import COLUMN_NAMES
+from foucault_bench.bench.run.store import ResultsStore, compare_runs, summarize
 
 MATRIX = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4", "cvode_bdf"], "kh": [0.2, 0.1],
                        "tol": [1e-6]}, source="test", default_name="store_test")

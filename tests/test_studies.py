@@ -1,4 +1,4 @@
-"""The study computations of bench.studies, at small sizes, against what the physics and numerics say
+"""The study computations of reports.studies, at small sizes, against what the physics and numerics say
 (PHYSICS.md "Integrators", "Airy precession"): explicit Euler's energy grows as (1 + (kh)²)ⁿ, Verlet's stays
 within (kh)²/4, each fixed-step integrator is stable below its declared limit and blows up above it, and the
 measured precession follows −Ω_E sin φ with the Airy correction at every latitude."""
@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bench.studies import (
+from foucault_bench.reports.studies import (
     STUDIES,
     LongTimeEnergyConfig,
     PrecessionLatitudeConfig,
@@ -21,10 +21,10 @@ from bench.studies import (
     precession_vs_latitude,
     stability_sweep,
 )
-from integrators.fixed_step import uniform_output_stride
-from integrators.registry import REGISTRY
-from models import PendulumParameters
-from models.parameters import SIDEREAL_EARTH_RATE_RAD_S
+from foucault_bench.integrators.fixed_step import uniform_output_stride
+from foucault_bench.integrators.registry import REGISTRY
+from foucault_bench.models import PendulumParameters
+from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
 
 LONG_TIME = LongTimeEnergyConfig(model="linear", length_m=10.0, amplitude_m=0.5, duration_s=600.0, n_out=301,
                                  runs=(("explicit_euler", 0.02), ("verlet", 0.2), ("heyoka_taylor", 1e-15),
@@ -143,7 +143,7 @@ def test_precession_follows_the_airy_corrected_textbook_rate() -> None:
 
 
 class _MemoryStore:
-    """Stands in for bench.store.ResultsStore's read_table/write_table (KeyError for a missing table)."""
+    """Stands in for bench.run.store.ResultsStore's read_table/write_table (KeyError for a missing table)."""
 
     def __init__(self) -> None:
         self.tables: dict[str, pd.DataFrame] = {}

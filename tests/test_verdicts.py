@@ -8,20 +8,20 @@ import math
 import numpy as np
 import pytest
 
-from bench.reference import reference_for
-from bench.scenes import SCENES, Scene
-from bench.verdicts import (
+from foucault_bench.bench.problems.reference import reference_for
+from foucault_bench.bench.problems.scenes import SCENES, Scene
+from foucault_bench.bench.verdicts.columns import compute_verdicts
+from foucault_bench.bench.verdicts.convergence import observed_order
+from foucault_bench.bench.verdicts.turning_points import (
     azimuth_error_bound,
-    compute_verdicts,
     grid_accelerations,
-    observed_order,
     precession_rate,
     rate_error_bound,
     turning_points_from_grid,
     turning_time_error_bound,
 )
-from integrators import STATUS_DIVERGED, STATUS_FAILED, Solution, get_integrator
-from models.analytic import linear_exact
+from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, Solution, get_integrator
+from foucault_bench.models.analytic import linear_exact
 
 
 pytestmark = pytest.mark.usefixtures("fresh_reference_cache")
@@ -32,7 +32,7 @@ def shortened(scene: Scene, duration_s: float) -> Scene:
 
 
 def measurement_bound(scene: Scene, turning_times_s: np.ndarray) -> float:
-    """Worst-case error (rad/s) of a rate measured on the scene's grid (bench.verdicts.azimuth_error_bound)."""
+    """Worst-case error (rad/s) of a rate measured on the scene's grid (bench.verdicts.turning_points.azimuth_error_bound)."""
     return rate_error_bound(turning_times_s, azimuth_error_bound(scene.params, scene.output_interval_s))
 
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from integrators import Problem, get_integrator
-from models import MODELS, PendulumParameters
-from models.parameters import P_OMEGA_Z
+from foucault_bench.integrators import Problem, get_integrator
+from foucault_bench.models import MODELS, PendulumParameters
+from foucault_bench.models.parameters import P_OMEGA_Z
 
 PARIS = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
 J = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.eye(2), np.zeros((2, 2))]])

@@ -1,12 +1,12 @@
-"""``foucault-bench results``: list stored matrix runs, export rows, compare two matrix runs (bench.store)."""
+"""``foucault-bench results``: list stored matrix runs, export rows, compare two matrix runs (bench.run.store)."""
 
 from __future__ import annotations
 
 import argparse
 import sys
 
-from bench.errors import InputError
-from bench.store import DEFAULT_DB
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.run.store import DEFAULT_DB
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -25,7 +25,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def main(args: argparse.Namespace) -> int:
     import pandas as pd
 
-    from bench.store import ResultsStore, summary_text
+    from foucault_bench.bench.run.store import ResultsStore, summary_text
 
     if args.compare and (args.csv or args.parquet or args.all or args.matrix_id):
         raise InputError("--compare takes two matrix ids and no other selection or export option")
@@ -52,7 +52,7 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _compare(store, first: str, second: str) -> int:
-    from bench.store import compare_runs
+    from foucault_bench.bench.run.store import compare_runs
 
     id_a, id_b = store.resolve_matrix_id(first), store.resolve_matrix_id(second)
     mismatches, costs, unmatched = compare_runs(store.frame(id_a), store.frame(id_b))

@@ -1,4 +1,4 @@
-"""``foucault-bench run``: run a benchmark matrix and store one row per run (bench.runner, bench.store).
+"""``foucault-bench run``: run a benchmark matrix and store one row per run (bench.run.runner, bench.run.store).
 
 The matrix is validated completely before anything runs; every problem is reported (exit status 2).
 """
@@ -10,8 +10,8 @@ import os
 import sys
 import time
 
-from bench.errors import InputError
-from bench.store import DEFAULT_DB
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.run.store import DEFAULT_DB
 
 
 def default_jobs() -> int:
@@ -38,9 +38,9 @@ def main(args: argparse.Namespace) -> int:
     if jobs < 1:
         raise InputError(f"--jobs must be at least 1, got {jobs}")
 
-    from bench.matrix import load_matrix
-    from bench.runner import make_executor, run_matrix
-    from bench.store import ResultsStore, summary_text
+    from foucault_bench.bench.run.matrix import load_matrix
+    from foucault_bench.bench.run.runner import make_executor, run_matrix
+    from foucault_bench.bench.run.store import ResultsStore, summary_text
 
     matrix = load_matrix(args.matrix)
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{jobs} worker process(es)"

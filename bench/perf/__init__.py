@@ -27,15 +27,15 @@ import sys
 import time
 from pathlib import Path
 
-from bench.perf.measure import ROW_HEADERS, Row, machine_description
+from foucault_bench.bench.perf.measure import ROW_HEADERS, Row, machine_description
 
 SECTIONS: dict[str, str] = {
-    "loops": "bench.perf.fixed_step",
-    "adapters": "bench.perf.adapters",
-    "compile": "bench.perf.compile_cache",
-    "memory": "bench.perf.memory",
-    "sweeps": "bench.perf.sweeps",
-    "matrices": "bench.perf.matrices",
+    "loops": "foucault_bench.bench.perf.fixed_step",
+    "adapters": "foucault_bench.bench.perf.adapters",
+    "compile": "foucault_bench.bench.perf.compile_cache",
+    "memory": "foucault_bench.bench.perf.memory",
+    "sweeps": "foucault_bench.bench.perf.sweeps",
+    "matrices": "foucault_bench.bench.perf.matrices",
 }
 
 
@@ -54,7 +54,7 @@ def _table(rows: list[list], headers: list[str], markdown: bool) -> str:
 
 
 def main(args: argparse.Namespace) -> int:
-    from bench.timing import limit_threads
+    from foucault_bench.bench.run.timing import limit_threads
 
     limit_threads()  # one thread per native pool, as in the runner's workers (set before numpy is imported)
     sections = args.only or list(SECTIONS)

@@ -11,7 +11,7 @@ the numba right-hand side from Python, the same solve's cost per evaluation with
 (scikit-sundae's own per-callback cost), and the effect of the analytic Jacobian (heyoka's symbolic
 derivative, ``Model.jacobian_into``) against CVODE's internal difference quotients.
 
-Setting: the 3 m laboratory pendulum of ``bench.scenes`` (spherical model, the physical one) over
+Setting: the 3 m laboratory pendulum of ``bench.problems.scenes`` (spherical model, the physical one) over
 ``DURATION_S`` with its 0.45 s output grid, tol = ``TOL``. Timed by the thread's CPU time (every library here
 computes on the calling thread; ``foucault-bench perf`` caps the BLAS and OpenMP pools at one thread, as the
 runner's workers do), in interleaved rounds.
@@ -26,11 +26,11 @@ from typing import Any, Callable
 
 import numpy as np
 
-from bench.perf.measure import Row, interleaved, median_ratio
-from bench.scenes import SCENES
-from integrators import get_integrator
-from integrators.adaptive import absolute_tolerance, heyoka_tolerance, step_budget
-from integrators.cvode import CvodeAdams, CvodeBdf
+from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio
+from foucault_bench.bench.problems.scenes import SCENES
+from foucault_bench.integrators import get_integrator
+from foucault_bench.integrators.adaptive import absolute_tolerance, heyoka_tolerance, step_budget
+from foucault_bench.integrators.cvode import CvodeAdams, CvodeBdf
 
 SECTION = "adapters"
 TARGET = 1.05

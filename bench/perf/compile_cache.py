@@ -13,9 +13,9 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
-from bench.perf.measure import Row, cache_environment, run_probe
-from integrators import REGISTRY
-from models import MODELS
+from foucault_bench.bench.perf.measure import Row, cache_environment, run_probe
+from foucault_bench.integrators import REGISTRY
+from foucault_bench.models import MODELS
 
 SECTION = "compile"
 

@@ -21,11 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bench.perf.c_loops import MODELS, SCHEMES, CLoops, CompilerMissing, compile_c_loops
-from bench.perf.measure import Row, interleaved, median_ratio
-from integrators import get_integrator
-from models import MODELS as MODEL_REGISTRY
-from models import PendulumParameters
+from foucault_bench.bench.perf.c_loops import MODELS, SCHEMES, CLoops, CompilerMissing, compile_c_loops
+from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio
+from foucault_bench.integrators import get_integrator
+from foucault_bench.models import MODELS as MODEL_REGISTRY
+from foucault_bench.models import PendulumParameters
 
 SECTION = "loops"
 TARGET_OFF = 1.2

@@ -8,7 +8,7 @@ warm quick run takes ≤ 30 % of the cold one (compile once), and the default ma
 ``--quick`` runs the quick matrix only.
 
 Where the time goes is read back from the stored rows: per run, warm-up + timed repeats ≈
-``compile_time_s + (1 + repeats) × wall_time_s`` (bench.timing's protocol), summed per integrator; the
+``compile_time_s + (1 + repeats) × wall_time_s`` (bench.run.timing's protocol), summed per integrator; the
 remainder of the wall time (× the workers) is start-up, references and scheduling.
 """
 
@@ -21,8 +21,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from bench.perf.measure import Row, cache_environment, run_timed
-from bench.store import ResultsStore
+from foucault_bench.bench.perf.measure import Row, cache_environment, run_timed
+from foucault_bench.bench.run.store import ResultsStore
 
 SECTION = "matrices"
 TARGET_WARM_FRACTION = 0.30
@@ -32,7 +32,7 @@ QUICK_WARM_RUNS = 3
 
 def run_matrix(name: str, root: Path, db: Path) -> float:
     """Run one matrix with the caches under ``root``; its wall time (s). Raises if the command fails."""
-    command = [sys.executable, "-m", "bench.cli", "run", "--matrix", name, "--db", str(db), "--no-progress"]
+    command = [sys.executable, "-m", "foucault_bench.bench.cli", "run", "--matrix", name, "--db", str(db), "--no-progress"]
     wall_s, done = run_timed(command, cache_environment(root))
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed ({done.returncode}):\n{done.stderr.strip()[-2000:]}")
@@ -61,7 +61,7 @@ def dominant(frame: pd.DataFrame, label: str, wall_s: float, jobs: int) -> list[
 
 def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
     """Cold and warm matrix runs; the rows, a table of where the time went and its headers."""
-    from bench.commands.run import default_jobs
+    from foucault_bench.bench.commands.run import default_jobs
 
     jobs = default_jobs()
     headers = ["run", "integrator", "runs", "busy s", "share of workers' time", "longest run s"]

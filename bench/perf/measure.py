@@ -102,7 +102,7 @@ def median_ratio(numerator: list[float], denominator: list[float]) -> float:
 def cache_environment(root: Path) -> dict[str, str]:
     """Environment variables pointing every compilation cache the suite uses into ``root``: numba's
     (NUMBA_CACHE_DIR), heyoka's (XDG_CACHE_HOME/heyoka, the default of ``llvm_state.get_diskcache_path``) and
-    the reference solutions' (FOUCAULT_BENCH_CACHE, ``bench.reference``). A fresh ``root`` gives a cold start."""
+    the reference solutions' (FOUCAULT_BENCH_CACHE, ``bench.problems.reference``). A fresh ``root`` gives a cold start."""
     return {
         "NUMBA_CACHE_DIR": str(root / "numba"),
         "XDG_CACHE_HOME": str(root / "xdg"),
@@ -113,7 +113,7 @@ def cache_environment(root: Path) -> dict[str, str]:
 def run_probe(arguments: list[str], environment: dict[str, str] | None = None, timeout_s: float = 900.0) -> Any:
     """Run ``python -m bench.perf.probes ARGUMENTS`` in a fresh interpreter (with ``environment`` added to this
     one's) and return the JSON it prints on its last line of stdout."""
-    command = [sys.executable, "-m", "bench.perf.probes", *arguments]
+    command = [sys.executable, "-m", "foucault_bench.bench.perf.probes", *arguments]
     done = subprocess.run(command, capture_output=True, text=True, timeout=timeout_s,
                           env={**os.environ, **(environment or {})})
     if done.returncode != 0:

@@ -10,7 +10,7 @@ per swing period whatever the step).
 
 from __future__ import annotations
 
-from bench.perf.measure import Row, run_probe
+from foucault_bench.bench.perf.measure import Row, run_probe
 
 SECTION = "memory"
 TARGET_MB = 300.0

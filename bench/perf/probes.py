@@ -26,7 +26,7 @@ PROBE_TOLERANCE = 1.0e-8
 
 
 def _probe_parameters():
-    from models import PendulumParameters
+    from foucault_bench.models import PendulumParameters
 
     return PendulumParameters(length_m=3.0, latitude_deg=48.846, amplitude_m=0.3)
 
@@ -35,9 +35,9 @@ def compile_probe(integrator_name: str, model_names: list[str]) -> dict:
     started = time.perf_counter()
     import numpy as np
 
-    from integrators import Problem, get_integrator
-    from integrators.heyoka_taylor import REFERENCE_TOLERANCE
-    from models import MODELS
+    from foucault_bench.integrators import Problem, get_integrator
+    from foucault_bench.integrators.heyoka_taylor import REFERENCE_TOLERANCE
+    from foucault_bench.models import MODELS
 
     import_s = time.perf_counter() - started
     integrator = get_integrator(integrator_name)
@@ -67,9 +67,9 @@ def compile_probe(integrator_name: str, model_names: list[str]) -> dict:
 def memory_probe(integrator_name: str, model_name: str, steps: int, span_kh: float) -> dict:
     import numpy as np
 
-    from bench.timing import peak_rss_mb
-    from integrators import Problem, get_integrator
-    from models import MODELS
+    from foucault_bench.bench.run.timing import peak_rss_mb
+    from foucault_bench.integrators import Problem, get_integrator
+    from foucault_bench.models import MODELS
 
     params = _probe_parameters()
     span = span_kh / params.pendulum_frequency_rad_s

@@ -25,9 +25,9 @@ import time
 
 import numpy as np
 
-from bench.perf.measure import Row, interleaved
-from integrators.adaptive import heyoka_tolerance
-from models import MODELS, PendulumParameters
+from foucault_bench.bench.perf.measure import Row, interleaved
+from foucault_bench.integrators.adaptive import heyoka_tolerance
+from foucault_bench.models import MODELS, PendulumParameters
 
 SECTION = "sweeps"
 N_PENDULUMS = 64

@@ -27,14 +27,15 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from bench.scenes import SEED_EARTH_RATE_RAD_S
-from bench.store import ResultsStore, setting_label
-from bench.verdicts import energy_scale, energy_verdicts, precession_rate
-from integrators import STATUS_OK, Problem, Solution, get_integrator
-from integrators.registry import REGISTRY
-from models import Model, PendulumParameters, get_model
-from models.analytic import linear_exact, seed_approximate, seed_gap_bound
-from models.parameters import SIDEREAL_EARTH_RATE_RAD_S, STANDARD_GRAVITY_M_S2
+from foucault_bench.bench.problems.scenes import SEED_EARTH_RATE_RAD_S
+from foucault_bench.bench.run.store import ResultsStore, setting_label
+from foucault_bench.bench.verdicts.columns import energy_scale, energy_verdicts
+from foucault_bench.bench.verdicts.turning_points import precession_rate
+from foucault_bench.integrators import STATUS_OK, Problem, Solution, get_integrator
+from foucault_bench.integrators.registry import REGISTRY
+from foucault_bench.models import Model, PendulumParameters, get_model
+from foucault_bench.models.analytic import linear_exact, seed_approximate, seed_gap_bound
+from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S, STANDARD_GRAVITY_M_S2
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -42,7 +43,7 @@ from models.parameters import SIDEREAL_EARTH_RATE_RAD_S, STANDARD_GRAVITY_M_S2
 # --------------------------------------------------------------------------------------------------------------
 def relative_energy_error(model: Model, params: PendulumParameters, states: np.ndarray) -> np.ndarray:
     """(E(t) − E₀) / E_swing on the rows of ``states`` (columns x, y, ẋ, ẏ), with E₀ and E_swing from
-    ``bench.verdicts.energy_scale`` (the normalisation of the results table) and E from the model's own energy
+    ``bench.verdicts.columns.energy_scale`` (the normalisation of the results table) and E from the model's own energy
     source evaluated with numpy (``models.base``: the same source the compiled code uses)."""
     energy0, swing = energy_scale(model, params)
     energy = model.energy(np, states[:, 0], states[:, 1], states[:, 2], states[:, 3], params.parameter_vector())
@@ -156,7 +157,7 @@ class StabilitySweepConfig:
 
 def stability_sweep(config: StabilitySweepConfig = StabilitySweepConfig(), progress: bool = True) -> pd.DataFrame:
     """Max relative energy error |E − E₀|/E_swing over every step (streamed by the fixed-step loop, scaled as in
-    ``bench.verdicts.energy_verdicts``) after ``steps`` steps, per integrator and k·h.
+    ``bench.verdicts.columns.energy_verdicts``) after ``steps`` steps, per integrator and k·h.
 
     Columns: integrator, family, stability_limit_kh (NaN when unstable for every h), kh, steps_done,
     energy_max_rel_error, status, message, plus the config's scalars.
@@ -207,7 +208,7 @@ def precession_vs_latitude(config: PrecessionLatitudeConfig = PrecessionLatitude
 
     One ``heyoka.taylor_adaptive_batch`` carries all latitudes (batch element i has the parameter vector of
     latitude i); a non-terminal event on r·ṙ = 0 crossing downwards (a maximum of the radius) records each
-    turning point from heyoka's dense output, and ``bench.verdicts.precession_rate`` fits the rate
+    turning point from heyoka's dense output, and ``bench.verdicts.turning_points.precession_rate`` fits the rate
     (PHYSICS.md "Measuring the precession rate"). Events at t = 0 (release from rest) are dropped, as in the
     fixed-step turning-point detector.
 

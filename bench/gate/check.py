@@ -21,7 +21,7 @@ Kinds of bound (``BOUND_KINDS``):
 * ``max``, ``min``, ``max_abs`` on a column: checked on every selected row, which must also have status ``ok``;
 * ``status = "diverged"`` (or ``ok``, ``failed``): every selected row has that status;
 * ``min_order`` on an error column: the convergence order fitted across the fixed-step sweep of each selected
-  scene × integrator (``bench.verdicts.observed_order`` on the effective step sizes), at least 3 settings;
+  scene × integrator (``bench.verdicts.convergence.observed_order`` on the effective step sizes), at least 3 settings;
 * ``max_ratio`` with ``relative_to``: column of the row ÷ column of another integrator's row of the same scene,
   measured in the same matrix run (the only way to bound wall time or memory: ``MACHINE_COLUMNS``).
   ``relative_to = "rk4"`` compares with rk4 at the row's own setting; ``relative_to = {integrator = "rk4",
@@ -58,12 +58,12 @@ from typing import TYPE_CHECKING, Any, Iterable, Sequence
 import numpy as np
 import pandas as pd
 
-from bench.errors import InputError
-from bench.schema import COLUMN_NAMES, VERDICT_COLUMNS
-from bench.store import setting_label
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.schema import COLUMN_NAMES, VERDICT_COLUMNS
+from foucault_bench.bench.run.store import setting_label
 
-if TYPE_CHECKING:  # for annotations only: bench.matrix imports the scenes and the integrators
-    from bench.matrix import Matrix
+if TYPE_CHECKING:  # for annotations only: bench.run.matrix imports the scenes and the integrators
+    from foucault_bench.bench.run.matrix import Matrix
 
 BUILT_IN_DIRECTORY = "thresholds"
 TOP_LEVEL_KEYS = ("description", "matrix", "bound")
@@ -177,7 +177,7 @@ class Outcome:
 
 def built_in_thresholds() -> list[str]:
     """Names of the thresholds files shipped with the package (``bench/thresholds/NAME.toml``)."""
-    directory = importlib.resources.files("bench").joinpath(BUILT_IN_DIRECTORY)
+    directory = importlib.resources.files("foucault_bench.bench").joinpath(BUILT_IN_DIRECTORY)
     return sorted(entry.name.removesuffix(".toml") for entry in directory.iterdir() if entry.name.endswith(".toml"))
 
 
@@ -188,7 +188,7 @@ def load_thresholds(name_or_path: str | Path) -> Thresholds:
     built_ins = built_in_thresholds()
     directory = None
     if str(name_or_path) in built_ins and not path.exists():
-        resource = importlib.resources.files("bench").joinpath(BUILT_IN_DIRECTORY, f"{name_or_path}.toml")
+        resource = importlib.resources.files("foucault_bench.bench").joinpath(BUILT_IN_DIRECTORY, f"{name_or_path}.toml")
         text, source = resource.read_text(encoding="utf-8"), f"built-in thresholds {str(name_or_path)!r}"
     elif path.is_file():
         try:
@@ -397,7 +397,7 @@ def _close(a: float, b: float) -> bool:
 def effective_kh(row: pd.Series, requested_kh: float) -> float | None:
     """The kh the fixed-step loop runs when asked for ``requested_kh`` on the row's output grid
     (``integrators.fixed_step.uniform_output_stride``), or ``None`` when the row lacks the grid or the step."""
-    from integrators.fixed_step import uniform_output_stride
+    from foucault_bench.integrators.fixed_step import uniform_output_stride
 
     n_out, duration, kh, step = (row.get(name) for name in ("n_out", "duration_s", "kh", "step_s"))
     if any(value is None or pd.isna(value) for value in (n_out, duration, kh, step)) or n_out < 2 or step <= 0:
@@ -456,8 +456,8 @@ def validate_against(thresholds: Thresholds, frame: pd.DataFrame, *, what: str) 
     """Raise ``InputError`` for every bound that names an unknown scene, integrator or family, or selects no row
     of ``frame`` (``what`` names the rows in messages, e.g. "matrix 'quick'"), or whose sweep or counterpart
     is missing."""
-    from bench.scenes import SCENES
-    from integrators import REGISTRY
+    from foucault_bench.bench.problems.scenes import SCENES
+    from foucault_bench.integrators import REGISTRY
 
     scenes = sorted(set(frame["scene"]))
     integrators = sorted(set(frame["integrator"]))
@@ -542,7 +542,7 @@ def _not_ok(row: pd.Series) -> str:
 def evaluate(thresholds: Thresholds, frame: pd.DataFrame) -> list[Outcome]:
     """Check every bound on ``frame`` (the results table of one matrix run, already validated with
     ``validate_against``); one outcome per bound and row (per scene × integrator for ``min_order``)."""
-    from bench.verdicts import observed_order
+    from foucault_bench.bench.verdicts.convergence import observed_order
 
     outcomes = []
     for bound in thresholds.bounds:
@@ -701,7 +701,7 @@ def main(args: argparse.Namespace) -> int:
     if args.db and args.results:
         raise InputError("--db is where a fresh matrix run is kept; with --results give the database there")
     if args.results:
-        from bench.store import ResultsStore
+        from foucault_bench.bench.run.store import ResultsStore
 
         with ResultsStore(args.results, create=False) as store:
             matrix_id = store.resolve_matrix_id(args.matrix_id)
@@ -727,10 +727,10 @@ def run_for_check(thresholds: Thresholds, matrix_name: str, *, db: str | None, j
                   progress: bool) -> tuple[pd.DataFrame, str]:
     """Validate ``thresholds`` against the planned runs of the matrix (before anything runs), run the matrix
     into ``db`` (a temporary database when ``None``) and return its rows and a description of them."""
-    from bench.commands.run import default_jobs
-    from bench.matrix import load_matrix
-    from bench.runner import run_matrix
-    from bench.store import ResultsStore
+    from foucault_bench.bench.commands.run import default_jobs
+    from foucault_bench.bench.run.matrix import load_matrix
+    from foucault_bench.bench.run.runner import run_matrix
+    from foucault_bench.bench.run.store import ResultsStore
 
     matrix = load_matrix(matrix_name)
     jobs = default_jobs() if jobs is None else jobs
@@ -749,9 +749,9 @@ def planned_rows(matrix: "Matrix") -> pd.DataFrame:
     """The identity columns of the rows ``matrix`` will produce, as the runner fills them (``base_row``), with
     each fixed-step run's effective step (``uniform_output_stride`` on the scene's grid), its family and
     ``n_out``: enough to validate a thresholds file before anything runs."""
-    from bench.runner import base_row
-    from integrators import REGISTRY
-    from integrators.fixed_step import uniform_output_stride
+    from foucault_bench.bench.run.runner import base_row
+    from foucault_bench.integrators import REGISTRY
+    from foucault_bench.integrators.fixed_step import uniform_output_stride
 
     rows = []
     for spec in matrix.runs:

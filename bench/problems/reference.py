@@ -33,10 +33,11 @@ from typing import Any
 
 import numpy as np
 
-from bench.scenes import Scene
-from bench.verdicts import grid_accelerations, precession_rate, released_from_rest, turning_points_from_grid
-from integrators import STATUS_OK, get_integrator
-from integrators.heyoka_taylor import REFERENCE_TOLERANCE
+from foucault_bench.bench.problems.scenes import Scene
+from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
+from foucault_bench.bench.verdicts.columns import released_from_rest
+from foucault_bench.integrators import STATUS_OK, get_integrator
+from foucault_bench.integrators.heyoka_taylor import REFERENCE_TOLERANCE
 
 REFERENCE_INTEGRATOR = "heyoka_taylor_quad"
 CACHE_ENVIRONMENT_VARIABLE = "FOUCAULT_BENCH_CACHE"
@@ -44,7 +45,7 @@ DEFAULT_CACHE_DIRECTORY = Path.home() / ".cache" / "foucault-bench"
 CACHE_FORMAT = 1
 """Bump when the layout of the cached files changes."""
 
-_PACKAGE_ROOT = Path(__file__).resolve().parent.parent
+_PACKAGE_ROOT = Path(__file__).resolve().parents[2]
 
 
 @dataclass
@@ -55,7 +56,7 @@ class Reference:
         t: output times (s), the scene's grid.
         y: states (x, y, ẋ, ẏ) in m and m/s, shape (len(t), 4), float64.
         turning_points: (t in s, x in m, y in m) of each radius maximum, release point included for a release
-            from rest (``bench.verdicts.turning_points_from_grid``), shape (n, 3).
+            from rest (``bench.verdicts.turning_points.turning_points_from_grid``), shape (n, 3).
         precession_rate_rad_s: swing-plane rate measured from them (counter-clockwise about up positive).
         precession_rate_stderr_rad_s: its standard error.
         key: the cache key (see module docstring).

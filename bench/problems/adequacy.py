@@ -3,7 +3,7 @@
 The models form a hierarchy (PHYSICS.md "Models"): linear planar (seed eqs. 6-7) < the seed's nonlinear planar
 (eqs. 4-5) < the spherical pendulum with the full rotation vector. For a scene, every pair of models in which
 the scene's model takes part is integrated with the reference integrator on the scene's grid (each run is a
-cached ``bench.reference`` of the scene with the model replaced) and compared:
+cached ``bench.problems.reference`` of the scene with the model replaced) and compared:
 
 * ``precession_rate_diff``: (rate of the simpler model − rate of the richer) / (Ω_E|sin φ|), signed, from the
   turning points as in ``bench.verdicts``;
@@ -17,7 +17,7 @@ planar vs spherical differ in rate by the Airy term −sign(sin φ)(3/8)θ₀² 
 Olsson, Am. J. Phys. 49, 531, 1981) and in swing frequency by the finite-amplitude term k θ₀²/16 (Landau &
 Lifshitz, Mechanics, §28, eq. 28.13), which moves the trajectories apart by ≈ 2|sin(½ k θ₀² t / 16)| · A.
 
-``python -m bench.adequacy`` prints the table of the built-in scenes (references from the cache or computed).
+``python -m bench.problems.adequacy`` prints the table of the built-in scenes (references from the cache or computed).
 """
 
 from __future__ import annotations
@@ -26,9 +26,10 @@ import dataclasses
 import math
 from typing import Any
 
-from bench.reference import Reference, reference_for
-from bench.scenes import Scene
-from bench.verdicts import max_position_gap, rate_scale
+from foucault_bench.bench.problems.reference import Reference, reference_for
+from foucault_bench.bench.problems.scenes import Scene
+from foucault_bench.bench.verdicts.columns import max_position_gap
+from foucault_bench.bench.verdicts.turning_points import rate_scale
 
 MODEL_HIERARCHY: tuple[str, ...] = ("linear", "seed_planar", "spherical")
 """Models from simplest to richest (PHYSICS.md "Models" 1, 3, 4)."""
@@ -111,8 +112,8 @@ def adequacy_table(scenes: list[Scene]) -> list[dict[str, Any]]:
     return [row for scene in scenes for row in model_adequacy(scene)]
 
 
-if __name__ == "__main__":  # python -m bench.adequacy: the table of the built-in scenes
-    from bench.scenes import SCENES
+if __name__ == "__main__":  # python -m bench.problems.adequacy: the table of the built-in scenes
+    from foucault_bench.bench.problems.scenes import SCENES
 
     for entry in adequacy_table(list(SCENES.values())):
         print(f"{entry['scene']:16s} {entry['simpler_model']:>11s} vs {entry['model']:9s} "

@@ -4,20 +4,20 @@ A matrix file (read with ``tomllib``) looks like this (README "Benchmark matrice
 
     name = "example"
     description = "what this matrix is for"
-    scenes = ["pantheon"]                 # built-in scenes (bench.scenes.SCENES)
+    scenes = ["pantheon"]                 # built-in scenes (bench.problems.scenes.SCENES)
     integrators = ["rk4", "verlet", "cvode_bdf"]
     kh = [0.5, 0.25, 0.125]               # fixed-step sweep: step h in units of 1/k = √(L/g)
     tol = [1e-6, 1e-9]                    # adaptive sweep: tolerance handed to the integrator as ``tol``
     plugins = ["my_package.my_integrator"]  # modules imported first (they register integrators)
 
-    [scene.lab]                           # an inline scene, read by bench.scenes.scene_from_mapping
+    [scene.lab]                           # an inline scene, read by bench.problems.scenes.scene_from_mapping
     model = "linear"
     ...
 
     [override.explicit_euler]             # this integrator's own sweep instead of the shared one
     kh = [0.01, 0.005]
 
-    [timing]                              # the timing protocol (bench.timing.TimingPolicy)
+    [timing]                              # the timing protocol (bench.run.timing.TimingPolicy)
     min_repeats = 3
 
 Step sizes are given as kh = k·h (k = √(g/L)), the quantity the stability limits and error constants are
@@ -45,20 +45,20 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
-from bench.errors import InputError
-from bench.reference import REFERENCE_INTEGRATOR, physics_identity
-from bench.scenes import SCENES, Scene, scene_from_mapping
-from bench.store import setting_label
-from bench.timing import TimingPolicy
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR, physics_identity
+from foucault_bench.bench.problems.scenes import SCENES, Scene, scene_from_mapping
+from foucault_bench.bench.run.store import setting_label
+from foucault_bench.bench.run.timing import TimingPolicy
 
 TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "integrators", "kh", "tol", "override", "plugins",
                   "timing")
 SETTING_KEYS = ("kh", "tol")
 TIMING_KEYS = tuple(field.name for field in dataclasses.fields(TimingPolicy))
-BUILT_IN_DIRECTORY = Path(__file__).resolve().parent / "matrices"
-PACKAGE_ROOT = Path(__file__).resolve().parents[1]
-NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "bench/scenes.py", "bench/reference.py", "bench/verdicts.py",
-                  "bench/runner.py", "bench/timing.py")
+BUILT_IN_DIRECTORY = Path(__file__).resolve().parents[1] / "matrices"
+PACKAGE_ROOT = Path(__file__).resolve().parents[2]
+NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "bench/problems/scenes.py", "bench/problems/reference.py",
+                  "bench/verdicts/*.py", "bench/run/runner.py", "bench/run/timing.py")
 """Source files (relative to the package root) whose contents are part of every run key."""
 
 
@@ -281,13 +281,13 @@ def _sweep(value: Any, key: str, where: str, problem) -> list[float]:
 
 def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timing: TimingPolicy,
           problem) -> list[RunSpec]:
-    from integrators import REGISTRY  # imported here: plugins must be imported first
+    from foucault_bench.integrators import REGISTRY  # imported here: plugins must be imported first
 
     names = _string_list(document, "integrators", problem, required=True)
     integrators = []
     for name in names:
         if name == REFERENCE_INTEGRATOR:
-            problem(f"integrators: {name} computes the references (bench.reference) and is not swept")
+            problem(f"integrators: {name} computes the references (bench.problems.reference) and is not swept")
         elif name not in REGISTRY:
             problem(f"integrators: unknown integrator {name!r}{_suggestion(name, REGISTRY)}; "
                     f"known integrators: {', '.join(sorted(set(REGISTRY) - {REFERENCE_INTEGRATOR}))}")

@@ -4,12 +4,12 @@ Order of work (``run_matrix``):
 
 1. open a matrix run in the results store (``--resume`` continues the latest one with the same matrix hash
    and skips the run keys it already holds);
-2. per scene, in the workers: the reference (``bench.reference.reference_for``, cached on disk) and the
-   model-adequacy rows (``bench.adequacy.model_adequacy``), stored in the ``adequacy`` table; a scene whose
+2. per scene, in the workers: the reference (``bench.problems.reference.reference_for``, cached on disk) and the
+   model-adequacy rows (``bench.problems.adequacy.model_adequacy``), stored in the ``adequacy`` table; a scene whose
    reference cannot be computed has all its runs stored as ``failed`` rows with the reason;
 3. every run (``execute_run``): the integrator's ``solve`` on the scene's problem (the scene's output grid,
    identical for every integrator; fixed-step runs stream their step-wise metrics and never store steps),
-   timed by the protocol of ``bench.timing``, verdicts from ``bench.verdicts.compute_verdicts`` on the
+   timed by the protocol of ``bench.run.timing``, verdicts from ``bench.verdicts.columns.compute_verdicts`` on the
    warm-up call's solution; the row is written as soon as the run finishes.
 
 Nothing is lost when one run fails: an exception anywhere in a run (solver, verdicts, a plug-in) becomes a
@@ -18,7 +18,7 @@ is replaced; the runs that were in flight are retried one at a time in a fresh w
 its worker again is stored as ``failed``.
 
 Workers: ``jobs`` processes started with the ``spawn`` method (forking a process that has started numba's,
-LLVM's or TBB's threads is unsafe), each made single-threaded by ``bench.timing.limit_threads`` before it
+LLVM's or TBB's threads is unsafe), each made single-threaded by ``bench.run.timing.limit_threads`` before it
 imports numpy, so that timings do not depend on how many runs share the machine's cores. Longer runs are
 started first (adaptive before fixed-step, longer scenes and finer settings first), which shortens the tail.
 """
@@ -37,16 +37,16 @@ from typing import Any, Callable, Iterator
 
 from tqdm import tqdm
 
-from bench.adequacy import model_adequacy
-from bench.errors import InputError
-from bench.matrix import Matrix, RunSpec
-from bench.reference import reference_for
-from bench.schema import COLUMN_NAMES, VERDICT_COLUMNS
-from bench.scenes import Scene
-from bench.store import ResultsStore
-from bench.timing import limit_threads, peak_rss_mb, time_repeated
-from bench.verdicts import compute_verdicts
-from integrators import STATUS_FAILED, STATUS_OK, get_integrator
+from foucault_bench.bench.problems.adequacy import model_adequacy
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.run.matrix import Matrix, RunSpec
+from foucault_bench.bench.problems.reference import reference_for
+from foucault_bench.bench.schema import COLUMN_NAMES, VERDICT_COLUMNS
+from foucault_bench.bench.problems.scenes import Scene
+from foucault_bench.bench.run.store import ResultsStore
+from foucault_bench.bench.run.timing import limit_threads, peak_rss_mb, time_repeated
+from foucault_bench.bench.verdicts.columns import compute_verdicts
+from foucault_bench.integrators import STATUS_FAILED, STATUS_OK, get_integrator
 
 NOT_DETERMINISTIC = "warning: the output differed between repeated calls (not deterministic)"
 DASK_CONNECT_TIMEOUT_S = 10.0
@@ -272,7 +272,7 @@ def run_matrix(matrix: Matrix, store: ResultsStore, *, jobs: int = 1, executor: 
     """Run ``matrix`` and store one row per run; return the matrix id.
 
     Args:
-        matrix: a validated matrix (``bench.matrix.load_matrix``).
+        matrix: a validated matrix (``bench.run.matrix.load_matrix``).
         store: where rows, provenance and adequacy rows go.
         jobs: local worker processes, when no ``executor`` is given.
         executor: where to run (``make_executor``); closed when the matrix run ends.

@@ -6,7 +6,7 @@ Tables:
   The runner writes and commits each row as soon as its run finishes, so a killed matrix keeps what finished.
 * ``matrix_runs``: one row per matrix run with its provenance (matrix name, source and hash, code version, git
   commit, package versions, CPU model, host, UTC start and end, jobs or scheduler, status).
-* ``adequacy``: the model-adequacy rows of ``bench.adequacy.model_adequacy`` per matrix run and scene.
+* ``adequacy``: the model-adequacy rows of ``bench.problems.adequacy.model_adequacy`` per matrix run and scene.
 * any study table another module writes with ``write_table`` (read back with ``read_table``).
 
 Also the two standard views of stored rows: ``summarize`` (one line per scene × integrator) and
@@ -32,11 +32,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from bench.errors import InputError
-from bench.schema import COLUMN_NAMES, COLUMNS, VERDICT_COLUMNS
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS, VERDICT_COLUMNS
 
 if TYPE_CHECKING:
-    from bench.matrix import Matrix
+    from foucault_bench.bench.run.matrix import Matrix
 
 DEFAULT_DB = Path("results") / "foucault.sqlite"
 RUNS_TABLE = "runs"
@@ -161,7 +161,7 @@ class ResultsStore:
         With ``resume`` the latest matrix run with the same matrix hash (same runs, same code version) is
         continued, so that one matrix id ends up holding every row once; otherwise a new id is made.
         """
-        from bench.matrix import code_version, git_commit  # here: bench.matrix imports this module
+        from foucault_bench.bench.run.matrix import code_version, git_commit  # here: bench.matrix imports this module
 
         now = utc_now()
         if resume:

@@ -11,13 +11,13 @@ How the built-in scenes were chosen:
   that resolves the precession rate to the precision its source quotes it. The linear model neglects the Airy
   precession (3/8)θ₀² (θ₀ = A/L), the release-side term ≈ ¼θ₀³cot φ and the centrifugal anisotropy; a scene
   is linear when these stay well below the rounding of the quoted rate, spherical otherwise. Each scene's
-  ``why_model`` gives its numbers; ``bench.adequacy`` measures what the other models would change.
+  ``why_model`` gives its numbers; ``bench.problems.adequacy`` measures what the other models would change.
 * **Amplitude.** Not well sourced for any real pendulum (PHYSICS.md): each scene states the amplitude it
   assumes, a swing of θ₀ ≈ 0.045-0.05 rad unless the scene is about large swings.
 * **Duration.** Cost grows with the number of swings, so each real scene lasts 200-520 small-swing periods
   (30 min to 1 h), enough for the swing plane to turn 5-15°; the default matrix (every integrator family
   over a work-precision sweep of every real scene) then stays within minutes on 2 cores, and the real128
-  reference of a scene takes at most about 6 s (measured; ``bench.reference``).
+  reference of a scene takes at most about 6 s (measured; ``bench.problems.reference``).
 * **Output interval.** About an eighth of a small-swing period, chosen not to divide the half period exactly:
   fine enough to locate every turning point (``bench.verdicts`` needs less than a quarter period; this
   module enforces a fifth) with a measurement floor far below the physics, and coarse enough that fixed
@@ -35,14 +35,14 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from bench.errors import InputError
-from integrators import Problem
-from models import MODELS, SIDEREAL_EARTH_RATE_RAD_S, Model, PendulumParameters, get_model
-from models.parameters import STANDARD_GRAVITY_M_S2
+from foucault_bench.bench.errors import InputError
+from foucault_bench.integrators import Problem
+from foucault_bench.models import MODELS, SIDEREAL_EARTH_RATE_RAD_S, Model, PendulumParameters, get_model
+from foucault_bench.models.parameters import STANDARD_GRAVITY_M_S2
 
 MIN_OUTPUT_INTERVALS_PER_PERIOD = 5.0
 """The output interval must be at most 1/5 of the small-swing period: turning points are located on the grid
-(``bench.verdicts.turning_points_from_grid``), which needs samples on both sides of each radius maximum
+(``bench.verdicts.turning_points.turning_points_from_grid``), which needs samples on both sides of each radius maximum
 (strictly less than a quarter period; a fifth leaves a margin for the longer period of large swings)."""
 
 MAX_OUTPUT_POINTS = 2_000_000
@@ -292,7 +292,7 @@ def _linear_why(theta0: float, quoted: str, quoted_rounding: float, latitude_deg
         f"The linear model (seed eqs. 6-7) turns the plane at exactly −Ω_E sin φ; what it leaves out at θ₀ = "
         f"{theta0:.4f} is the Airy precession (3/8)θ₀² = {airy:.1e}, the release-side term ≲ ¼θ₀³cot φ = "
         f"{release_side:.0e} and the centrifugal anisotropy (≈ (Ω_E/k)², below 1e-8), all below the quoted "
-        f"rounding, so the spherical model would not change the figure the scene is about (bench.adequacy "
+        f"rounding, so the spherical model would not change the figure the scene is about (bench.problems.adequacy "
         f"reports the trajectory it does change: the finite-amplitude period)."
     )
 

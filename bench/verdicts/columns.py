@@ -1,0 +1,160 @@
+"""Verdicts: what one run's output says about the integrator (the verdict columns of ``bench.schema``).
+
+Every verdict is computed from the solution on the scene's output grid, the same grid for every integrator
+of a scene, by one procedure for all integrators and for the reference (``bench.problems.reference``), so that the
+comparison is fair and the numbers are deterministic (same inputs → same bits on the same machine).
+
+* **Energy** (``energy_verdicts``): the model's energy E (``Model.energy``: the Jacobi integral on the sphere)
+  on the grid, as the relative error (E − E₀)/E_swing. The scale E_swing = E₀ − E_rest is the energy of the
+  swing above the bob at rest at the bottom (E_rest = E(0, 0, 0, 0)), so that the figure does not depend on
+  where the potential's zero lies: for the planar models E_rest = 0 and E_swing = E₀; for the spherical model
+  E₀ ≈ −gL while E_swing ≈ gA²/2L, and dividing by |E₀| would make the same error look 2/θ₀² times smaller.
+  Reported: max |·|, least-squares slope in t, and the streamed per-step max rescaled to E_swing.
+* **Precession** (``turning_points_from_grid``, ``precession_rate``): turning points of the swing (maxima of
+  the radius) located on a quintic Hermite interpolant of the grid (positions, velocities, and accelerations
+  from the model), their azimuths ψ unwrapped as 2ψ, halved, and fitted by a straight line in t
+  (PHYSICS.md "Measuring the precession rate"). The rate is compared with −Ω_E sin φ and with the
+  reference's rate measured the same way on the same grid.
+* **Trajectory**: max over the grid of |r − r_other|/A against the exact linear solution, the seed's
+  approximate solution (``models.analytic``) and the reference.
+* **Convergence** (``observed_order``): the order seen in a sweep of step sizes.
+
+Turning points streamed by some integrators (``Solution.streamed``) are not used for the verdicts: one
+measurement on one grid for everyone keeps integrators with and without event detection comparable, and
+makes the measurement independent of the code it judges.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from foucault_bench.bench.verdicts.turning_points import (
+    finite_prefix,
+    least_squares_slope,
+    grid_accelerations,
+    precession_rate,
+    rate_scale,
+    turning_points_from_grid,
+)
+from foucault_bench.integrators import STATUS_DIVERGED, STATUS_OK, Solution
+from foucault_bench.models import Model, PendulumParameters
+from foucault_bench.models.analytic import linear_exact, seed_approximate
+
+if TYPE_CHECKING:  # annotations only
+    from foucault_bench.bench.problems.reference import Reference
+    from foucault_bench.bench.problems.scenes import Scene
+
+NAN = math.nan
+
+# --- energy ------------------------------------------------------------------------------------------------------
+
+
+def energy_scale(model: Model, params: PendulumParameters) -> tuple[float, float]:
+    """(E₀, E_swing) in J/kg: the energy at release and the swing's energy above the bob at rest at the bottom."""
+    p = params.parameter_vector()
+    energy0 = float(model.numba_energy(*params.initial_state(), p))
+    swing = energy0 - float(model.numba_energy(0.0, 0.0, 0.0, 0.0, p))
+    return energy0, (swing if swing > 0.0 else abs(energy0) or 1.0)
+
+
+def energy_verdicts(model: Model, params: PendulumParameters, solution: Solution) -> dict[str, float | None]:
+    """Relative energy error (E − E₀)/E_swing on the finite part of the output grid: max, drift, streamed max.
+
+    The drift is the least-squares slope (1/s) of the relative error against t. ``energy_max_rel_error_steps``
+    is the streamed per-step max, which the fixed-step loop normalises by the same E_swing; it is ``None`` when
+    the integrator does not stream it. For a model that conserves no energy (the seed's eqs. 4-5) the numbers mix the model's own drift with the integrator's (``energy_conserved`` = 0).
+    """
+    n = finite_prefix(solution.y)
+    energy0, swing = energy_scale(model, params)
+    p = params.parameter_vector()
+    energy = model.numba_energy
+    values = np.array([energy(row[0], row[1], row[2], row[3], p) for row in solution.y[:n]], dtype=np.float64)
+    relative = (values - energy0) / swing
+    drift = least_squares_slope(solution.t[:n], relative) if n >= 2 else NAN
+    streamed = solution.streamed.energy_max_rel_error if solution.streamed is not None else None
+    return {
+        "energy_conserved": int(model.conserves_energy),
+        "energy_max_rel_error": float(np.max(np.abs(relative))) if n else NAN,
+        "energy_drift_per_s": drift,
+        "energy_max_rel_error_steps": None if streamed is None else float(streamed),
+    }
+
+
+# --- trajectory gaps ---------------------------------------------------------------------------------------------
+
+
+def max_position_gap(y: np.ndarray, other: np.ndarray, amplitude_m: float) -> float:
+    """max over rows of |r − r_other| / A (positions are the first two columns); NaN if no row is finite."""
+    n = min(finite_prefix(y), finite_prefix(other))
+    if n == 0:
+        return NAN
+    gap = np.hypot(y[:n, 0] - other[:n, 0], y[:n, 1] - other[:n, 1])
+    return float(np.max(gap)) / amplitude_m
+
+
+def released_from_rest(params: PendulumParameters) -> bool:
+    return params.release_velocity_m_s == (0.0, 0.0)
+
+
+# --- all verdicts of one run -------------------------------------------------------------------------------------
+
+
+VERDICT_KEYS = (
+    "energy_conserved",
+    "energy_max_rel_error",
+    "energy_drift_per_s",
+    "energy_max_rel_error_steps",
+    "precession_rate_rad_s",
+    "precession_rate_error",
+    "precession_rate_ref_error",
+    "analytic_gap_exact",
+    "analytic_gap_seed",
+    "reference_error",
+)
+
+
+def compute_verdicts(scene: "Scene", solution: Solution, reference: "Reference | None") -> dict[str, Any]:
+    """The verdict columns of ``bench.schema`` for one run (plus ``precession_rate_stderr_rad_s`` and
+    ``turning_points``, the count used for the rate).
+
+    * failed run: only ``energy_conserved`` (a property of the model); everything else NaN;
+    * diverged run: energy and trajectory gaps over the grid up to the last finite row (lower bounds of what
+      the run did), precession NaN (the swing near a divergence is no longer a pendulum's);
+    * ``analytic_gap_*`` only for a planar model released from rest: the closed forms assume the release, and
+      for the spherical model the gap would measure the model (its finite-amplitude period), not the run;
+      for the seed's eqs. 4-5, ``analytic_gap_seed`` is the comparison the seed itself makes (its §4);
+    * ``reference_error`` and ``precession_rate_ref_error`` only with a reference on the same grid.
+    """
+    model = scene.model_object
+    params = scene.params
+    verdicts: dict[str, Any] = dict.fromkeys(VERDICT_KEYS, NAN)
+    verdicts.update(energy_conserved=int(model.conserves_energy), energy_max_rel_error_steps=None,
+                    precession_rate_stderr_rad_s=NAN, turning_points=0)
+    if solution.status not in (STATUS_OK, STATUS_DIVERGED):
+        return verdicts
+    t, y = np.asarray(solution.t, dtype=np.float64), np.asarray(solution.y, dtype=np.float64)
+    if reference is not None and (reference.t.shape != t.shape or not np.array_equal(reference.t, t)):
+        raise ValueError(f"scene {scene.name}: the solution's output grid differs from the reference's")
+    verdicts.update(energy_verdicts(model, params, solution))
+    amplitude = params.amplitude_m
+    if released_from_rest(params) and not model.constrained_to_sphere:
+        verdicts["analytic_gap_exact"] = max_position_gap(y, linear_exact(params, t), amplitude)
+        verdicts["analytic_gap_seed"] = max_position_gap(y, seed_approximate(params, t), amplitude)
+    if reference is not None:
+        verdicts["reference_error"] = max_position_gap(y, reference.y, amplitude)
+    if solution.status == STATUS_OK:
+        points = turning_points_from_grid(t, y, grid_accelerations(model, params, y), released_from_rest(params))
+        rate, stderr = precession_rate(points)
+        scale = rate_scale(params)
+        verdicts.update(
+            precession_rate_rad_s=rate,
+            precession_rate_stderr_rad_s=stderr,
+            turning_points=int(points.shape[0]),
+            precession_rate_error=abs(rate - params.textbook_precession_rate_rad_s) / scale,
+        )
+        if reference is not None:
+            verdicts["precession_rate_ref_error"] = abs(rate - reference.precession_rate_rad_s) / scale
+    return verdicts
