@@ -45,11 +45,7 @@ class CvodePython(CvodeIntegrator):
         def rhs(t, y, yp):
             rhs_into(t, y, yp, p)
 
-        # A two-point tspan would switch scikit-sundae to returning every internal step: such a grid gets a
-        # midpoint, dropped again below (CV_NORMAL output does not change the steps).
-        tspan = settings.t_span
-        if tspan.size == 2:
-            tspan = np.array([tspan[0], 0.5 * (tspan[0] + tspan[1]), tspan[1]])
+        tspan = settings.t_span  # never two points (``cvode.output_span``): that is scikit-sundae's one-step mode
         options = {
             "method": settings.method,
             "max_order": settings.max_order,
