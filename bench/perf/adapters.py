@@ -45,21 +45,13 @@ def _scene_problem(quick: bool):
     return replace(scene, duration_s=duration).problem()
 
 
-def _radial_cvode(t, y, g):
-    g[0] = y[0] * y[2] + y[1] * y[3]
-
-
-_radial_cvode.terminal = [False]
-_radial_cvode.direction = [-1]
-
-
 def bare_cvode(problem, method: str, analytic_jacobian: bool = True) -> Callable[[], Any]:
-    """scikit-sundae's CVODE with the adapter's right-hand side, Jacobian, tolerances, grid and event."""
+    """scikit-sundae's CVODE with the ``cvode_*_py`` adapter's right-hand side, Jacobian, tolerances and grid."""
     from sksundae.cvode import CVODE
 
     p = problem.parameter_vector
     rhs_into = problem.model.numba_rhs_into
-    jacobian_into = problem.model.jacobian_into
+    jacobian_into = problem.model.numba_jacobian_into
 
     def rhs(t, y, yp):
         rhs_into(t, y, yp, p)
@@ -69,8 +61,7 @@ def bare_cvode(problem, method: str, analytic_jacobian: bool = True) -> Callable
 
     tspan = np.union1d([0.0], problem.t_out)
     options = {"method": method, "rtol": TOL, "atol": absolute_tolerance(problem.params, TOL),
-               "max_num_steps": step_budget(problem.params, float(np.max(np.diff(tspan)))),
-               "eventsfn": _radial_cvode, "num_events": 1}
+               "max_num_steps": step_budget(problem.params, float(np.max(np.diff(tspan))))}
     if analytic_jacobian:
         options["jacfn"] = jacobian
     y0 = problem.initial_state
@@ -134,8 +125,8 @@ def _final_state(result: Any) -> np.ndarray:
 
 
 BARE: dict[str, Callable] = {
-    "cvode_adams": lambda problem: bare_cvode(problem, "Adams"),
-    "cvode_bdf": lambda problem: bare_cvode(problem, "BDF"),
+    "cvode_adams_py": lambda problem: bare_cvode(problem, "Adams"),
+    "cvode_bdf_py": lambda problem: bare_cvode(problem, "BDF"),
     "heyoka_taylor": bare_heyoka,
     "scipy_dop853": lambda problem: bare_solve_ivp(problem, "DOP853"),
     "scipy_rk45": lambda problem: bare_solve_ivp(problem, "RK45"),
