@@ -226,21 +226,23 @@ _keep_alive: list = []
 @functools.cache
 def cvode_output_loop(library: Sundials) -> Callable:
     """njit ``(mem, y_vector, t_return, t_span, y_work, y_out) -> (flag, rows)``: ``CVode`` to each of
-    ``t_span[1:]`` in turn, copying the state (``y_work``, wrapped by ``y_vector``) into ``y_out``; stops at
-    the first negative flag. ``t_return`` (one element) receives the time CVODE reached."""
+    ``t_span[1:]`` in turn, copying the state (``y_work``, wrapped by the N_Vector at address ``y_vector``) into
+    ``y_out``; stops at the first negative flag. ``t_return`` is the address of a double that receives the
+    time CVODE reached. Element-wise copies: numba compiles them in a fifth of the time of slice assignments."""
     from numba import njit
 
     cvode = library.CVode
 
     @njit(nogil=True, **JIT_OPTIONS)
     def loop(mem, y_vector, t_return, t_span, y_work, y_out):
-        y_out[0, :] = y_work
-        t_address = t_return.ctypes.data
+        for j in range(y_work.size):
+            y_out[0, j] = y_work[j]
         for row in range(1, t_span.size):
-            flag = cvode(mem, t_span[row], y_vector, t_address, CV_NORMAL)
+            flag = cvode(mem, t_span[row], y_vector, t_return, CV_NORMAL)
             if flag < 0:
                 return flag, row
-            y_out[row, :] = y_work
+            for j in range(y_work.size):
+                y_out[row, j] = y_work[j]
         return 0, t_span.size
 
     return loop
@@ -330,7 +332,7 @@ def run_cvode(library: Sundials, model: Model, settings: CvodeSettings, paramete
         _check(lib.CVodeSetMaxNumSteps(mem, settings.max_num_steps), "CVodeSetMaxNumSteps")
         _check(lib.CVodeSetStopTime(mem, float(settings.t_span[-1])), "CVodeSetStopTime")
 
-        flag, rows = loop(mem.value, y_vector, t_return, settings.t_span, y_work, y_out)
+        flag, rows = loop(mem.value, y_vector, t_return.ctypes.data, settings.t_span, y_work, y_out)
         y_out[rows:] = np.nan
 
         counters = {}
