@@ -44,7 +44,7 @@ import numpy as np
 
 from foucault_bench.integrators.adaptive import AdaptiveIntegrator, absolute_tolerance, step_budget
 from foucault_bench.integrators.base import STATUS_FAILED, Problem, Solution
-from foucault_bench.integrators.cvode_library import FLAG_DESCRIPTIONS, CvodeSettings, load_sundials, run_cvode
+from foucault_bench.integrators.cvode_library import CVODE_FLAGS, CvodeSettings, load_sundials, run_cvode
 from foucault_bench.integrators.registry import register
 
 MAX_ORDER = {"Adams": 12, "BDF": 5}
@@ -129,11 +129,10 @@ class CvodeCompiled(CvodeIntegrator):
         )
         if run.flag < 0:
             solution.status = STATUS_FAILED
-            description = FLAG_DESCRIPTIONS.get(run.flag, "see the CVODE user guide")
+            name, description = CVODE_FLAGS.get(run.flag, ("?", "see the CVODE user guide"))
             if run.flag == -1:
                 description += f" (max_num_steps = {settings.max_num_steps})"
-            solution.message = (f"CVODE flag {run.flag} ({run.flag_name or '?'}) at t = {run.t_reached:.6g} s: "
-                                f"{description}")
+            solution.message = f"CVODE flag {run.flag} ({name}) at t = {run.t_reached:.6g} s: {description}"
         return solution
 
 

@@ -56,13 +56,26 @@ COUNTERS = ("CVodeGetNumSteps", "CVodeGetNumRhsEvals", "CVodeGetNumLinRhsEvals",
             "CVodeGetNumErrTestFails", "CVodeGetNumNonlinSolvConvFails")
 """CVODE's optional outputs (``long int``) read after a solve (CVODE user guide, "Optional output functions")."""
 
-FLAG_DESCRIPTIONS = {
-    -1: "took max_num_steps internal steps without reaching the next output time",
-    -2: "the requested accuracy cannot be reached (tolerance too small for double precision)",
-    -3: "error test failed repeatedly or with |h| = hmin",
-    -4: "corrector convergence failed repeatedly or with |h| = hmin",
+CVODE_FLAGS = {
+    -1: ("CV_TOO_MUCH_WORK", "took max_num_steps internal steps without reaching the next output time"),
+    -2: ("CV_TOO_MUCH_ACC", "the requested accuracy cannot be reached (tolerance too small for double precision)"),
+    -3: ("CV_ERR_FAILURE", "the error test failed repeatedly or with |h| = hmin"),
+    -4: ("CV_CONV_FAILURE", "the corrector iteration failed to converge repeatedly or with |h| = hmin"),
+    -5: ("CV_LINIT_FAIL", "the linear solver's initialisation failed"),
+    -6: ("CV_LSETUP_FAIL", "the linear solver's setup failed"),
+    -7: ("CV_LSOLVE_FAIL", "the linear solver's solve failed"),
+    -8: ("CV_RHSFUNC_FAIL", "the right-hand side failed unrecoverably"),
+    -9: ("CV_FIRST_RHSFUNC_ERR", "the right-hand side failed at the first call"),
+    -10: ("CV_REPTD_RHSFUNC_ERR", "the right-hand side failed recoverably, repeatedly"),
+    -11: ("CV_UNREC_RHSFUNC_ERR", "the right-hand side failed recoverably, without recovery"),
+    -16: ("CV_NLS_FAIL", "the nonlinear solver failed"),
+    -20: ("CV_MEM_FAIL", "a memory allocation failed"),
+    -22: ("CV_ILL_INPUT", "an input to CVode was illegal"),
+    -27: ("CV_TOO_CLOSE", "the output time is too close to the initial time"),
+    -28: ("CV_VECTOROP_ERR", "a vector operation failed"),
 }
-"""Meaning of CVODE's most common negative return flags (CVODE user guide, "CVode" return values)."""
+"""CVODE's negative return flags: name and meaning (SUNDIALS ``cvode.h`` and CVODE user guide, "CVode" return
+values)."""
 
 
 class SundialsUnavailable(RuntimeError):
@@ -119,9 +132,10 @@ class Sundials:
 
 def _prototypes(index: type) -> dict[str, tuple]:
     """name → (restype, argtypes) of every function used; pointers are ``c_void_p`` except where numba reads
-    through them (``POINTER(c_double)``) or calls them with addresses held as integers (``c_int64``)."""
+    through them (``POINTER(c_double)``) or calls the function with addresses held as pointer-sized integers
+    (``c_ssize_t``: the calling conventions pass both in the same registers)."""
     void_p, double, c_int, c_long = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
-    address = ctypes.c_int64
+    address = ctypes.c_ssize_t
     return {
         "SUNContext_Create": (c_int, [c_int, ctypes.POINTER(void_p)]),
         "SUNContext_Free": (c_int, [ctypes.POINTER(void_p)]),
@@ -148,10 +162,8 @@ def _prototypes(index: type) -> dict[str, tuple]:
         "CVodeSetMaxStep": (c_int, [void_p, double]),
         "CVodeSetStopTime": (c_int, [void_p, double]),
         "CVode": (c_int, [address, double, address, address, c_int]),
-        "CVodeGetReturnFlagName": (void_p, [c_long]),
         "CVodeFree": (None, [ctypes.POINTER(void_p)]),
         **{name: (c_int, [void_p, ctypes.POINTER(c_long)]) for name in COUNTERS},
-        "free": (None, [void_p]),
     }
 
 
@@ -179,7 +191,6 @@ def load_sundials(directory: str | None = None) -> Sundials:
             libraries.append(ctypes.CDLL(str(path)))
         except OSError as exc:
             raise SundialsUnavailable(f"cannot load SUNDIALS library {path}: {exc}") from None
-    libraries.append(ctypes.CDLL(None))  # the C library's free() for CVodeGetReturnFlagName's string
     functions = {}
     for name, (restype, argtypes) in _prototypes(index).items():
         function = next((getattr(library, name) for library in libraries if hasattr(library, name)), None)
@@ -275,14 +286,13 @@ class CvodeSettings:
 
 @dataclass
 class CvodeRun:
-    """What a compiled solve returns: states at ``t_span`` (NaN rows after a failure), CVODE's flag, the time
-    reached, its counters and, for a negative flag, CVODE's name for it."""
+    """What a compiled solve returns: states at ``t_span`` (NaN rows after a failure), CVODE's flag (the last
+    one: negative for a failure, ``CVODE_FLAGS``), the time reached and CVODE's counters (``COUNTERS``)."""
 
     y: np.ndarray
     flag: int
     t_reached: float
     counters: dict[str, int]
-    flag_name: str = ""
 
 
 def _check(flag: int, call: str) -> None:
@@ -333,21 +343,14 @@ def run_cvode(library: Sundials, model: Model, settings: CvodeSettings, paramete
         _check(lib.CVodeSetStopTime(mem, float(settings.t_span[-1])), "CVodeSetStopTime")
 
         flag, rows = loop(mem.value, y_vector, t_return.ctypes.data, settings.t_span, y_work, y_out)
-        y_out[rows:] = np.nan
 
         counters = {}
         for name in COUNTERS:
             value = ctypes.c_long()
             _check(lib.functions[name](mem, ctypes.byref(value)), name)
             counters[name] = int(value.value)
-        flag_name = ""
-        if flag < 0:
-            name_pointer = lib.CVodeGetReturnFlagName(flag)
-            if name_pointer:
-                flag_name = ctypes.string_at(name_pointer).decode()
-                lib.free(name_pointer)
         t_reached = float(t_return[0]) if rows > 1 or flag < 0 else float(settings.t_span[0])
-        return CvodeRun(y=y_out, flag=int(flag), t_reached=t_reached, counters=counters, flag_name=flag_name)
+        return CvodeRun(y=y_out, flag=int(flag), t_reached=t_reached, counters=counters)
     finally:
         if mem.value:
             lib.CVodeFree(ctypes.byref(mem))
