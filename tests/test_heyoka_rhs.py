@@ -93,7 +93,7 @@ def test_numba_jacobian_is_the_symbolic_jacobian(model: Model) -> None:
     round-off: ``RHS_AGREEMENT`` of each column's scale over the sample (measured: 0, 2.2e-16 and 6.6e-16 of
     it on the linear, seed-planar and spherical models)."""
     states, pars = random_sample(seed=3)
-    symbolic, compiled = np.empty((4, 4)), np.empty((4, 4))
+    symbolic = np.empty((4, 4))
     worst = 0.0
     for state, p in zip(states, pars):
         model.jacobian_into(0.0, state, symbolic, p)

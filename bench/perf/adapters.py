@@ -1,15 +1,16 @@
 """Section ``adapters``: our adaptive-integrator adapters against the bare libraries.
 
 Each adapter's ``solve`` (as the runner calls it: verdict streams on) is timed against the library called
-directly with the same compiled right-hand side, Jacobian, tolerances, output grid and turning-point event,
-set up once outside the timed call as a user would. Target: adapter ≤ 1.05× the bare call. Both sides must
+directly with the same compiled right-hand side, Jacobian, tolerances, output grid and turning-point event
+(none for CVODE, whose adapters time the output grid only), set up once outside the timed call as a user would. Target: adapter ≤ 1.05× the bare call. Both sides must
 return the same states (checked); what remains is the adapter's own work (validation, bookkeeping, silencing
 the C libraries' output, the step guards of the scipy adapter, the copy of heyoka's compiled integrator).
 
-Also reported for CVODE: the time per right-hand-side evaluation of a whole solve, the cost of one call of
-the numba right-hand side from Python, the same solve's cost per evaluation with a plain-Python oscillator
+Also reported for CVODE: the time per right-hand-side evaluation of a whole scikit-sundae solve
+(``cvode_*_py``; the compiled ``cvode_*`` are in section ``cvode``), the cost of one call of the numba
+right-hand side from Python, the same solve's cost per evaluation with a plain-Python oscillator
 (scikit-sundae's own per-callback cost), and the effect of the analytic Jacobian (heyoka's symbolic
-derivative, ``Model.jacobian_into``) against CVODE's internal difference quotients.
+derivative compiled by numba, ``Model.numba_jacobian_into``) against CVODE's internal difference quotients.
 
 Setting: the 3 m laboratory pendulum of ``bench.problems.scenes`` (spherical model, the physical one) over
 ``DURATION_S`` with its 0.45 s output grid, tol = ``TOL``. Timed by the thread's CPU time (every library here
