@@ -14,12 +14,13 @@ for a compiled fixed-step scheme) in a file of its own, set the class attributes
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import os
 import sys
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from typing import ClassVar, Iterator
+from typing import ClassVar, Iterator, TextIO
 
 import numpy as np
 
@@ -194,7 +195,8 @@ def quiet_native_output() -> Iterator[None]:
     for stream in {sys.stdout, sys.stderr, sys.__stdout__, sys.__stderr__}:
         if stream is not None:
             stream.flush()
-    with open(os.devnull, "w") as sink, contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
+    sink = _devnull()
+    with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
         fds = (1, 2)
         try:
             for fd in fds:
@@ -211,3 +213,9 @@ def quiet_native_output() -> Iterator[None]:
             for fd, copy in zip(fds, saved):
                 os.dup2(copy, fd)
                 os.close(copy)
+
+
+@functools.cache
+def _devnull() -> TextIO:
+    """/dev/null opened once per process for writing (``quiet_native_output`` runs around every solve)."""
+    return open(os.devnull, "w")  # noqa: SIM115  (kept open for the life of the process)
