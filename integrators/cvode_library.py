@@ -204,9 +204,10 @@ def load_sundials(directory: str | None = None) -> Sundials:
 # --- compiled callbacks and output loop ----------------------------------------------------------------------
 
 @functools.cache
-def compiled_callbacks(library: Sundials, model: Model) -> tuple[int, int]:
-    """Addresses of the ``CVRhsFn`` and ``CVLsJacFn`` callbacks of ``model`` (numba ``cfunc``; ``user_data``
-    points to the parameter vector)."""
+def compiled_callbacks(library: Sundials, model: Model) -> tuple:
+    """The ``CVRhsFn`` and ``CVLsJacFn`` callbacks of ``model`` as numba ``cfunc`` objects (CVODE gets their
+    ``address``; the cache keeps them, and so their machine code, alive). ``user_data`` points to the
+    parameter vector."""
     from numba import carray, cfunc, types
 
     rhs_into, jacobian_into = model.numba_rhs_into, model.numba_jacobian_into
@@ -226,12 +227,7 @@ def compiled_callbacks(library: Sundials, model: Model) -> tuple[int, int]:
         jacobian_into(t, carray(data(y), n), columns.T, carray(user_data, n_p, np.float64))
         return 0
 
-    _keep_alive.extend((rhs, jacobian))
-    return rhs.address, jacobian.address
-
-
-_keep_alive: list = []
-"""The compiled callbacks whose addresses were handed out (their machine code must outlive every solve)."""
+    return rhs, jacobian
 
 
 @functools.cache
@@ -309,7 +305,7 @@ def _created(pointer: int | None, call: str) -> int:
 def run_cvode(library: Sundials, model: Model, settings: CvodeSettings, parameters: np.ndarray) -> CvodeRun:
     """One CVODE solve with compiled callbacks: create, configure as ``settings`` says, loop, read counters,
     free (also when a call fails)."""
-    rhs_address, jacobian_address = compiled_callbacks(library, model)
+    rhs, jacobian = compiled_callbacks(library, model)
     loop = cvode_output_loop(library)
     lib, void_p = library, ctypes.c_void_p
     parameters = np.ascontiguousarray(parameters, dtype=np.float64)
@@ -326,13 +322,13 @@ def run_cvode(library: Sundials, model: Model, settings: CvodeSettings, paramete
         mem.value = _created(lib.CVodeCreate(CV_ADAMS if settings.method == "Adams" else CV_BDF, context),
                              "CVodeCreate")
         _check(lib.CVodeSetUserData(mem, parameters.ctypes.data), "CVodeSetUserData")
-        _check(lib.CVodeInit(mem, rhs_address, float(settings.t_span[0]), y_vector), "CVodeInit")
+        _check(lib.CVodeInit(mem, rhs.address, float(settings.t_span[0]), y_vector), "CVodeInit")
         _check(lib.CVodeSVtolerances(mem, settings.rtol, atol_vector), "CVodeSVtolerances")
         matrix = _created(lib.SUNDenseMatrix(STATE_SIZE, STATE_SIZE, context), "SUNDenseMatrix")
         solver = _created(lib.SUNLinSol_Dense(y_vector, matrix, context), "SUNLinSol_Dense")
         _check(lib.CVodeSetLinearSolver(mem, solver, matrix), "CVodeSetLinearSolver")
         if settings.analytic_jacobian:
-            _check(lib.CVodeSetJacFn(mem, jacobian_address), "CVodeSetJacFn")
+            _check(lib.CVodeSetJacFn(mem, jacobian.address), "CVodeSetJacFn")
         _check(lib.CVodeSetMaxNonlinIters(mem, settings.max_nonlin_iters), "CVodeSetMaxNonlinIters")
         _check(lib.CVodeSetMaxConvFails(mem, settings.max_conv_fails), "CVodeSetMaxConvFails")
         _check(lib.CVodeSetInitStep(mem, settings.first_step), "CVodeSetInitStep")
