@@ -218,4 +218,4 @@ def quiet_native_output() -> Iterator[None]:
 @functools.cache
 def _devnull() -> TextIO:
     """/dev/null opened once per process for writing (``quiet_native_output`` runs around every solve)."""
-    return open(os.devnull, "w")  # noqa: SIM115  (kept open for the life of the process)
+    return open(os.devnull, "w")  # kept open for the life of the process

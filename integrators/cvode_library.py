@@ -102,7 +102,8 @@ def find_library(name: str, directories: list[Path]) -> Path:
                 return matches[0]
     searched = ", ".join(str(d) for d in directories) or "(scikit-sundae is not installed)"
     raise SundialsUnavailable(f"SUNDIALS library {name!r} not found in {searched}: the compiled CVODE path needs "
-                              "the shared libraries shipped in scikit-sundae's wheel (pip install 'scikit-sundae>=1.2')")
+                              "the shared libraries shipped in scikit-sundae's wheel "
+                              "(pip install 'scikit-sundae>=1.2')")
 
 
 def sundials_configuration() -> dict[str, str]:

@@ -85,9 +85,12 @@ class CvodePython(CvodeIntegrator):
         return solution
 
 
+PYTHON_DRIVEN = "\n\n    Driven by scikit-sundae with Python callbacks (what a Python user of scikit-sundae gets).\n"
+
+
 @register
 class CvodeAdamsPy(CvodePython):
-    __doc__ = f"{CvodeAdams.__doc__.rstrip()}\n\n    Driven by scikit-sundae with Python callbacks (what a Python user of scikit-sundae gets).\n"
+    __doc__ = CvodeAdams.__doc__.rstrip() + PYTHON_DRIVEN
     name: ClassVar[str] = "cvode_adams_py"
     method: ClassVar[str] = CvodeAdams.method
     reference: ClassVar[str] = f"{CvodeAdams.reference}; scikit-sundae"
@@ -95,7 +98,7 @@ class CvodeAdamsPy(CvodePython):
 
 @register
 class CvodeBdfPy(CvodePython):
-    __doc__ = f"{CvodeBdf.__doc__.rstrip()}\n\n    Driven by scikit-sundae with Python callbacks (what a Python user of scikit-sundae gets).\n"
+    __doc__ = CvodeBdf.__doc__.rstrip() + PYTHON_DRIVEN
     name: ClassVar[str] = "cvode_bdf_py"
     method: ClassVar[str] = CvodeBdf.method
     reference: ClassVar[str] = f"{CvodeBdf.reference}; scikit-sundae"

@@ -48,7 +48,7 @@ def jacobian_source(model: "Model", function_name: str = "jacobian_into") -> str
     shared, reduced = sympy.cse(derivatives, symbols=sympy.numbered_symbols("c_"))
 
     class Printer(PythonCodePrinter):
-        def _print_Float(self, expr):  # noqa: N802  (sympy's printer protocol)
+        def _print_Float(self, expr):  # sympy's printer protocol names the method
             return repr(float(expr))
 
     printer = Printer({"standard": "python3"})

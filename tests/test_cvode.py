@@ -49,9 +49,9 @@ def one_step_count(integrator, problem: Problem, tol: float) -> tuple[int, int]:
 
     settings = integrator.settings(problem, tol)
     p, model = problem.parameter_vector, problem.model
-    options = dict(method=settings.method, max_order=settings.max_order, rtol=settings.rtol, atol=settings.atol,
-                   max_num_steps=settings.max_num_steps,
-                   jacfn=lambda t, y, yp, jj: model.numba_jacobian_into(t, y, jj, p))
+    options = {"method": settings.method, "max_order": settings.max_order, "rtol": settings.rtol,
+               "atol": settings.atol, "max_num_steps": settings.max_num_steps,
+               "jacfn": lambda t, y, yp, jj: model.numba_jacobian_into(t, y, jj, p)}
     solver = CVODE(lambda t, y, yp: model.numba_rhs_into(t, y, yp, p), **options)
     solver.init_step(0.0, settings.initial_state)
     t_end, steps, result = float(settings.t_span[-1]), 0, None
@@ -118,7 +118,7 @@ def test_loader_checks_the_sundials_configuration(monkeypatch, tmp_path) -> None
                               ("SUNDIALS_INT_TYPE", "short", "sunindextype"),
                               ("SUNDIALS_VERSION", "6.7.0", "SUNDIALS 6.7.0")]:
         configuration = {**library.sundials_configuration(), key: value}
-        monkeypatch.setattr(library, "sundials_configuration", lambda: configuration)
+        monkeypatch.setattr(library, "sundials_configuration", lambda changed=configuration: changed)
         with pytest.raises(SundialsUnavailable, match=words):
             load_sundials(str(tmp_path / key))  # a new directory: load_sundials caches only successes
         monkeypatch.undo()

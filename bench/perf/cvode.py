@@ -44,8 +44,8 @@ def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
             rows.append(Row(SECTION, f"cvode_{method}: compiled vs scikit-sundae", None, "µs",
                             note=f"paths disagree (nfev {fast.nfev} vs {slow.nfev}; {fast.message or slow.message})"))
             continue
-        times = interleaved({"compiled": lambda: compiled.solve(problem, tol=TOL),
-                             "python": lambda: python.solve(problem, tol=TOL)}, rounds)
+        times = interleaved({"compiled": lambda solver=compiled: solver.solve(problem, tol=TOL),
+                             "python": lambda solver=python: solver.solve(problem, tol=TOL)}, rounds)
         compiled_s, python_s = statistics.median(times["compiled"]), statistics.median(times["python"])
         ratio = median_ratio(times["python"], times["compiled"])
         per_rhs_compiled, per_rhs_python = compiled_s / fast.nfev * 1e6, python_s / fast.nfev * 1e6
