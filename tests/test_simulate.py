@@ -1,12 +1,15 @@
 """The interactive simulation (reports.simulate), headless: moving a slider changes the plotted path and the
 rate readout as the physics says (no precession at the equator, the sense flips in the south, the rate
-scales with Earth's rate), and --save writes an animation or says clearly why it cannot."""
+scales with Earth's rate); the sliders keep to their grids and bound each other; what the figure says (title,
+errors, divergence, Airy's rate) is true and inside it; --save writes an animation or says clearly why it
+cannot."""
 
 from __future__ import annotations
 
 import argparse
 import math
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -18,15 +21,20 @@ from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.verdicts.turning_points import azimuth_error_bound, rate_error_bound
 from foucault_bench.reports.simulate import (
     DEGREES_PER_HOUR_PER_RAD_S,
+    VIEW_BOUND,
+    WINDOW_TITLE,
     InteractiveSimulation,
     SimulationResult,
     SimulationSettings,
+    SimulationView,
     add_arguments,
+    format_setting,
+    open_window,
     save_animation,
     settings_from_args,
 )
 
-SMALL = SimulationSettings(length_m=10.0, amplitude_m=0.5, hours=0.25, latitude_deg=48.846, integrator="verlet",
+SMALL = SimulationSettings(length_m=10.0, amplitude_m=0.5, hours=0.25, latitude_deg=48.8, integrator="verlet",
                            model="linear", setting=0.05)
 
 
@@ -58,8 +66,7 @@ def _rate_tolerance(result: SimulationResult) -> float:
 
 
 def _path(app: InteractiveSimulation) -> tuple[np.ndarray, np.ndarray]:
-    east, north = app.view.numeric_line.get_data()
-    return np.asarray(east, dtype=float), np.asarray(north, dtype=float)
+    return app.view.drawn_path()
 
 
 def test_initial_readout_matches_minus_omega_sin_phi(app: InteractiveSimulation) -> None:
@@ -74,7 +81,7 @@ def test_initial_readout_matches_minus_omega_sin_phi(app: InteractiveSimulation)
 
 
 def test_equator_no_precession(app: InteractiveSimulation) -> None:
-    app.sliders["latitude_deg"].set_val(0.0)
+    app.set_value("latitude_deg", 0.0)
     try:
         result = app.view.result
         assert abs(result.measured_rate_rad_s) <= 1e-12 * result.settings.earth_rate_rad_s
@@ -84,13 +91,13 @@ def test_equator_no_precession(app: InteractiveSimulation) -> None:
         measured, expected = _readout_rates(app)
         assert measured == 0.0 and expected == 0.0
     finally:
-        app.sliders["latitude_deg"].set_val(SMALL.latitude_deg)
+        app.set_value("latitude_deg", SMALL.latitude_deg)
 
 
 def test_southern_latitude_flips_the_sense(app: InteractiveSimulation) -> None:
     north_rate = app.view.result.measured_rate_rad_s
     _, north_path = _path(app)
-    app.sliders["latitude_deg"].set_val(-SMALL.latitude_deg)
+    app.set_value("latitude_deg", -SMALL.latitude_deg)
     try:
         south = app.view.result
         assert south.measured_rate_rad_s > 0  # counter-clockwise in the south
@@ -100,13 +107,13 @@ def test_southern_latitude_flips_the_sense(app: InteractiveSimulation) -> None:
         measured, expected = _readout_rates(app)
         assert measured > 0 and expected > 0
     finally:
-        app.sliders["latitude_deg"].set_val(SMALL.latitude_deg)
+        app.set_value("latitude_deg", SMALL.latitude_deg)
 
 
 def test_doubling_earths_rate_doubles_the_measured_rate(app: InteractiveSimulation) -> None:
     single = app.view.result
     _, north_before = _path(app)
-    app.sliders["earth_rate_factor"].set_val(2.0 * SMALL.earth_rate_factor)
+    app.set_value("earth_rate_factor", 2.0 * SMALL.earth_rate_factor)
     try:
         double = app.view.result
         assert double.expected_rate_rad_s == pytest.approx(2.0 * single.expected_rate_rad_s, rel=1e-15)
@@ -116,18 +123,177 @@ def test_doubling_earths_rate_doubles_the_measured_rate(app: InteractiveSimulati
         # the plane turns twice as far: the largest northward excursion (A·sin of the turned angle) grows
         assert np.max(np.abs(north_after)) > 1.5 * np.max(np.abs(north_before))
     finally:
-        app.sliders["earth_rate_factor"].set_val(SMALL.earth_rate_factor)
+        app.set_value("earth_rate_factor", SMALL.earth_rate_factor)
 
 
-def test_an_amplitude_beyond_the_length_is_reported_not_raised(app: InteractiveSimulation) -> None:
-    app.sliders["amplitude_m"].set_val(SMALL.length_m + 1.0)
+def _inside_figure(figure: Figure, artist) -> bool:
+    """Whether a text's drawn extent lies wholly inside the figure (what is cut off the canvas cannot be read)."""
+    extent = artist.get_window_extent(figure.canvas.get_renderer())
+    box = figure.bbox
+    return box.x0 <= extent.x0 and extent.x1 <= box.x1 and box.y0 <= extent.y0 and extent.y1 <= box.y1
+
+
+def test_amplitude_and_length_bound_each_other(app: InteractiveSimulation) -> None:
+    """The amplitude slider stops below the length, the length slider above the amplitude; the title follows."""
+    app.set_value("amplitude_m", SMALL.length_m + 1.0)
     try:
-        assert app.view.result is None
-        assert "cannot simulate" in app.view.readout.get_text() and "amplitude_m" in app.view.readout.get_text()
-        assert len(_path(app)[0]) == 0
+        settings = app.view.settings
+        assert settings.amplitude_m == 9.95 and settings.length_m == SMALL.length_m  # largest 5 cm step below L
+        assert app.view.result is not None and app.view.result.status == "ok"
+        assert "A = 9.95 m" in app.view.axes.get_title() and app.sliders["amplitude_m"].valtext.get_text() == "9.95"
+        app.set_value("length_m", 2.0)  # below the amplitude: the length stops at the first step above it
+        assert app.view.settings.length_m == 10.0 and app.view.result is not None
+        assert "L = 10.0 m" in app.view.axes.get_title()
     finally:
-        app.sliders["amplitude_m"].set_val(SMALL.amplitude_m)
-    assert app.view.result is not None
+        app.set_value("amplitude_m", SMALL.amplitude_m)
+        app.set_value("length_m", SMALL.length_m)
+    assert app.view.settings == SMALL
+
+
+@pytest.mark.parametrize(("requested", "landed", "shown"), [
+    (0.115385, 0.0, "0.0"), (0.3, 0.0, "0.0"), (-0.45, 0.0, "0.0"), (0.6, 1.0, "1.0"), (89.7, 90.0, "90.0"),
+    (-89.6, -90.0, "-90.0"), (37.44, 37.4, "37.4")])
+def test_latitude_moves_in_tenths_and_snaps_to_equator_and_poles(app: InteractiveSimulation, requested: float,
+                                                                  landed: float, shown: str) -> None:
+    app.set_value("latitude_deg", requested)
+    try:
+        assert app.view.settings.latitude_deg == landed
+        assert f"φ = {shown}°" in app.view.axes.get_title()
+        assert app.sliders["latitude_deg"].valtext.get_text() == shown
+    finally:
+        app.set_value("latitude_deg", SMALL.latitude_deg)
+
+
+def test_length_and_amplitude_steps(app: InteractiveSimulation) -> None:
+    app.set_value("length_m", 12.26)
+    app.set_value("amplitude_m", 0.512)
+    try:
+        assert (app.view.settings.length_m, app.view.settings.amplitude_m) == (12.5, 0.5)
+        assert "L = 12.5 m, A = 0.50 m" in app.view.axes.get_title()
+    finally:
+        app.set_value("length_m", SMALL.length_m)
+
+
+def test_earths_rate_slider_is_logarithmic(app: InteractiveSimulation) -> None:
+    """1-5 Ω_E takes log10(5)/3 = 23 % of the slider (4 % on a linear 0-100 one) in steps of 0.1 Ω_E."""
+    slider = app.sliders["earth_rate_factor"]
+    assert (slider.valmin, slider.valmax) == (-1.0, 2.0)
+    app.set_value("earth_rate_factor", 2.37)
+    try:
+        assert app.view.settings.earth_rate_factor == 2.4
+        assert slider.val == pytest.approx(math.log10(2.4), abs=1e-15)
+        assert "ω = 2.4 Ω_E" in app.view.axes.get_title() and slider.valtext.get_text() == "2.4"
+        app.set_value("earth_rate_factor", 0.123)
+        assert app.view.settings.earth_rate_factor == 0.12 and slider.valtext.get_text() == "0.12"
+    finally:
+        app.set_value("earth_rate_factor", SMALL.earth_rate_factor)
+
+
+def test_off_grid_command_line_values_are_printed_in_full() -> None:
+    """A value given on the command line is simulated as given, so it is printed as given."""
+    assert format_setting("latitude_deg", 48.846) == "48.846" and format_setting("latitude_deg", 48.8) == "48.8"
+    figure = Figure(figsize=(12, 8))
+    FigureCanvasAgg(figure)
+    view = SimulationView(figure, SMALL, (0.07, 0.36, 0.5, 0.58))
+    view.update(replace(SMALL, latitude_deg=48.846, hours=0.02))
+    assert "φ = 48.846°" in view.axes.get_title()
+
+
+def test_refused_parameters_are_shown_in_full_inside_the_figure(app: InteractiveSimulation) -> None:
+    view = app.view
+    bad = replace(SMALL, length_m=3.0, amplitude_m=7.25)  # no slider reaches it; the command line refuses it too
+    view.update(bad)
+    try:
+        assert view.result is None and len(_path(app)[0]) == 0
+        shown = view.notice.get_text().replace("\n", " ")
+        with pytest.raises(ValueError) as error:
+            bad.params()
+        assert shown == f"cannot simulate: {error.value}"  # in full, wrapped, not cut
+        assert _inside_figure(view.figure, view.notice)
+        assert "L = 3.0 m, A = 7.25 m" in view.axes.get_title()  # the title says what was asked
+    finally:
+        view.update(SMALL)
+    assert not view.notice.get_visible() and _inside_figure(view.figure, view.readout)
+
+
+def test_a_diverging_run_stays_in_view_and_says_when_it_diverged() -> None:
+    """Explicit Euler's amplitude grows as (1 + (kh)²)^(n/2) (Hairer-Lubich-Wanner I.1): at kh = 0.2 it passes
+    1.2 A within ~20 periods and the integrator stops it at 1000 L."""
+    figure = Figure(figsize=(12, 8))
+    FigureCanvasAgg(figure)
+    settings = replace(SMALL, integrator="explicit_euler", setting=0.2, hours=0.5)
+    view = SimulationView(figure, settings, (0.07, 0.36, 0.5, 0.58))
+    view.update(settings)
+    result = view.result
+    assert result.status == "diverged"
+    drawn = result.drawn_until()
+    reach = np.hypot(result.numeric[:, 0], result.numeric[:, 1])
+    assert 0 < drawn < len(result.t_s) and reach[drawn] > VIEW_BOUND * settings.amplitude_m
+    east, north = view.drawn_path()
+    assert len(east) == drawn and np.max(np.hypot(east, north)) <= VIEW_BOUND * settings.amplitude_m
+    assert view.axes.get_xlim()[1] == pytest.approx(1.1 * VIEW_BOUND * settings.amplitude_m)
+    notice = view.notice.get_text().replace("\n", " ")
+    assert "explicit_euler run diverged after" in notice and f"t = {result.t_s[drawn]:.4g} s" in notice
+    assert re.search(r"after \d+ of \d+ steps \(t = [0-9.]+ s\)", notice)
+    assert view.notice.get_visible() and _inside_figure(figure, view.notice)
+
+
+def test_spherical_model_shows_airys_rate() -> None:
+    """At θ₀ = A/L = 0.2 Airy's (3/8)θ₀² is 1.5 % of the rate; the measurement follows it. Bound: the terms Airy
+    neglects (c₄θ₀⁴ + c₃θ₀³ cot φ, |c₄| ≤ 0.08, |c₃| ≤ 0.27: tests/test_verdicts.py, here ½ each) plus the
+    measurement bound."""
+    figure = Figure(figsize=(12, 8))
+    FigureCanvasAgg(figure)
+    settings = replace(SMALL, model="spherical", amplitude_m=2.0)
+    view = SimulationView(figure, settings, (0.07, 0.36, 0.5, 0.58))
+    view.update(settings)
+    result = view.result
+    theta0 = settings.amplitude_m / settings.length_m
+    airy = result.expected_rate_rad_s * (1.0 - 0.375 * theta0**2)
+    assert result.airy_rate_rad_s == pytest.approx(airy, rel=1e-15)
+    shown = float(re.search(r"Airy −ω sin φ \(1 − 3θ₀²/8\):\s+([+-][0-9.]+)", view.readout.get_text()).group(1))
+    assert shown == pytest.approx(airy * DEGREES_PER_HOUR_PER_RAD_S, abs=1e-4)
+    params = settings.params()
+    cot_phi = abs(math.cos(params.latitude_rad) / math.sin(params.latitude_rad))
+    neglected = (0.5 * theta0**4 + 0.5 * theta0**3 * cot_phi) * abs(result.expected_rate_rad_s)
+    assert abs(result.measured_rate_rad_s - airy) <= neglected + _rate_tolerance(result)
+    assert abs(result.measured_rate_rad_s - result.expected_rate_rad_s) > 2.0 * (neglected + _rate_tolerance(result))
+    assert _inside_figure(figure, view.readout)
+    # the planar models have no Airy line
+    view.update(replace(settings, model="linear"))
+    assert view.result.airy_rate_rad_s is None and "Airy" not in view.readout.get_text()
+
+
+def test_trail_fades_under_the_exact_solution_and_turning_points(app: InteractiveSimulation) -> None:
+    trail = app.view.trail
+    alphas = [line.get_alpha() for line in trail]
+    assert alphas == sorted(alphas) and alphas[0] < 0.5 * alphas[-1] and alphas[-1] == 1.0
+    top = max(line.get_zorder() for line in trail)
+    assert app.view.analytic_line.get_zorder() > top and app.view.turning_dots.get_zorder() > top
+
+
+def test_the_window_has_a_name() -> None:
+    import matplotlib.pyplot as plt
+
+    simulation = open_window(replace(SMALL, hours=0.02))
+    try:
+        assert simulation.view.figure.canvas.manager.get_window_title() == WINDOW_TITLE == "foucault-bench simulate"
+    finally:
+        plt.close(simulation.view.figure)
+
+
+def test_help_shows_defaults_and_choices() -> None:
+    from foucault_bench.integrators.registry import REGISTRY
+    from foucault_bench.models import MODELS
+
+    parser = argparse.ArgumentParser(prog="foucault-bench simulate")
+    add_arguments(parser)
+    text = " ".join(parser.format_help().split())
+    assert all(name in text for name in [*REGISTRY, *MODELS])
+    defaults = SimulationSettings()
+    for value in (defaults.latitude_deg, defaults.length_m, defaults.amplitude_m, defaults.hours):
+        assert f"(default: {value})" in text
+    assert "(default: 0.05)" in text and "(default: 1e-10)" in text and "(default: None)" not in text
 
 
 def test_save_writes_a_gif_with_the_requested_frames(tmp_path: Path) -> None:
