@@ -63,9 +63,7 @@ def _compare(store, first: str, second: str) -> int:
     if costs.empty:
         print("nothing to compare: the two matrix runs share no run")
         return 1
-    ratio_columns = [column for column in costs.columns if column.endswith("_ratio_b_over_a")]
-    print("\nmedian cost ratio B/A per integrator:")
-    print(costs.groupby("integrator")[ratio_columns].median().to_string(float_format=lambda value: f"{value:.3g}"))
+    print(cost_ratio_text(costs))
     if mismatches.empty:
         print(f"\naccuracy columns: identical bit for bit in all {len(costs)} shared runs")
     else:
@@ -74,3 +72,30 @@ def _compare(store, first: str, second: str) -> int:
     for run in unmatched:
         print(f"only in one of the two: {run}")
     return 0 if mismatches.empty and not unmatched else 1
+
+
+def cost_ratio_text(costs) -> str:
+    """The median cost ratio B/A per integrator over the runs where both costs are finite and positive
+    (``compare_runs``), then, per cost, how many runs were left out and why."""
+    import numpy as np
+
+    from foucault_bench.bench.run.store import COST_COLUMNS
+
+    suffix = "_ratio_b_over_a"
+    ratios = costs.groupby("integrator")[[f"{column}{suffix}" for column in COST_COLUMNS]].median()
+    ratios.columns = [column.removesuffix(suffix) for column in ratios.columns]
+    lines = ["", "median cost ratio B/A per integrator (over the runs where both costs are positive; '–': none):",
+             ratios.to_string(float_format=lambda value: f"{value:.3g}", na_rep="–")]
+    for column in COST_COLUMNS:
+        left_out = costs[f"{column}{suffix}"].isna()
+        if not left_out.any():
+            continue
+        cost_a, cost_b = costs.loc[left_out, f"{column}_a"], costs.loc[left_out, f"{column}_b"]
+        missing = int((~np.isfinite(cost_a) | ~np.isfinite(cost_b)).sum())
+        reasons = [f"{count} {why}" for count, why in (
+            (int(left_out.sum()) - missing, "with a cost of 0 or below in A or B"
+             + (" (nothing compiled, or a cached compile)" if column == "compile_time_s" else "")),
+            (missing, "with no finite cost in A or B (e.g. a failed run)")) if count]
+        lines.append(f"{column}: {int(left_out.sum())} of {len(costs)} shared runs left out, {'; '.join(reasons)}: "
+                     "a ratio to or of zero says nothing")
+    return "\n".join(lines)

@@ -377,8 +377,11 @@ def compare_runs(frame_a: pd.DataFrame, frame_b: pd.DataFrame) -> tuple[pd.DataF
     """Compare two matrix runs row by row, matched on ``run_identity`` (scene, integrator, exact setting).
 
     Returns (mismatches, costs, unmatched): one mismatch line per differing deterministic column of a row
-    (``DETERMINISTIC_COLUMNS``; must be empty for the same matrix and code on the same machine), the cost
-    ratios B/A per row, and the runs present in only one of the two.
+    (``DETERMINISTIC_COLUMNS``; must be empty for the same matrix and code on the same machine), the costs of A
+    and B and their ratio B/A per row (``<cost>_a``, ``<cost>_b``, ``<cost>_ratio_b_over_a``), and the runs
+    present in only one of the two. A ratio is given only where both costs are finite and positive: a compile
+    time of 0 or below (nothing compiled, or a cached compile: the first call was no slower than the others)
+    or a missing cost (a failed run) has no meaningful ratio, and gives NaN.
     """
     left = frame_a.assign(run=run_identity(frame_a))
     right = frame_b.assign(run=run_identity(frame_b))
@@ -392,5 +395,8 @@ def compare_runs(frame_a: pd.DataFrame, frame_b: pd.DataFrame) -> tuple[pd.DataF
                                             merged[f"{column}_b"][~equal])]
     costs = merged[["run", "scene", "integrator"]].copy()
     for column in COST_COLUMNS:
-        costs[f"{column}_ratio_b_over_a"] = merged[f"{column}_b"] / merged[f"{column}_a"]
+        cost_a, cost_b = merged[f"{column}_a"].astype(float), merged[f"{column}_b"].astype(float)
+        comparable = np.isfinite(cost_a) & np.isfinite(cost_b) & (cost_a > 0) & (cost_b > 0)
+        costs[f"{column}_a"], costs[f"{column}_b"] = cost_a, cost_b
+        costs[f"{column}_ratio_b_over_a"] = (cost_b / cost_a).where(comparable)
     return pd.DataFrame(mismatches, columns=["run", "column", "a", "b"]), costs, unmatched
