@@ -64,19 +64,27 @@ class _Builder:
     def __init__(self, folder: Path, progress: bool):
         self.folder = folder
         self.blocks: list[Block] = []
-        self.progress = tqdm(desc="report figures", unit="figure", disable=not progress, leave=False)
+        self.progress = progress
+        self.pending: list[Callable[[], Path]] = []
+        """Figures to draw, in order: drawn by ``draw_figures`` once the total is known."""
 
     def add(self, *blocks: Block) -> None:
         self.blocks.extend(blocks)
 
     def figure(self, draw: Callable[..., Path], name: str, caption: str, *data: object) -> None:
-        draw(*data, self.folder / FIGURES / name)
-        self.progress.update()
+        self.pending.append(lambda: draw(*data, self.folder / FIGURES / name))
         self.add(Figure(f"{FIGURES}/{name}", caption))
 
-    def table(self, frame: pd.DataFrame, name: str, title: str, notes: dict[str, str] | None = None) -> None:
+    def draw_figures(self) -> None:
+        """Draw the collected figures, with a counter that knows the total (and so shows an ETA)."""
+        for draw in tqdm(self.pending, total=len(self.pending), desc="report figures", unit="figure",
+                         disable=not self.progress, leave=False):
+            draw()
+
+    def table(self, frame: pd.DataFrame, name: str, title: str, notes: dict[str, str] | None = None,
+              collapsible: bool = False) -> None:
         shown = write_table_files(frame, self.folder, f"{TABLES}/{name}", title, tables.INTEGER_COLUMNS)
-        self.add(Table(title, shown, f"{TABLES}/{name}", tables.notes_for(frame, notes)))
+        self.add(Table(title, shown, f"{TABLES}/{name}", tables.notes_for(frame, notes), collapsible))
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -162,7 +170,11 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
             "bounded near (kh)²/4, CVODE and heyoka stay near round-off at tight tolerances. "
             f"Values below {charts.LOG_FLOOR:g} (exact zeros included) are drawn at {charts.LOG_FLOOR:g}."))
         builder.figure(charts.long_time_energy, "study_long_time_energy",
-                       "Relative energy error against time (log-log), per integrator family.", energy)
+                       "Relative energy error against time (log-log), per integrator family. Thick line: the largest "
+                       "error so far (its running maximum), which separates bounded, drifting and growing errors; "
+                       "faint line of the same colour: the error at each output time, whose oscillation the "
+                       "maximum hides (a symplectic method's error swings within a band every half period).",
+                       energy)
         builder.table(tables.long_time_summary(energy), "study_long_time_energy_summary",
                       "Long-time energy: error after the first hour and at the end")
     stability = studies.get("study_stability")
@@ -198,15 +210,21 @@ def _adequacy(builder: _Builder, adequacy: pd.DataFrame) -> None:
     builder.add(Paragraph(
         "Per scene, what each simpler model gets wrong compared with the scene's model "
         "(bench.problems.adequacy.model_adequacy)."))
-    builder.figure(charts.adequacy, "model_adequacy", "Model adequacy per scene (log scale).", adequacy)
+    builder.figure(charts.adequacy, "model_adequacy",
+                   "Model adequacy per scene (log scale). Left panel, 'Precession rate missed': how far the simpler "
+                   "model's precession rate is from the richer one's, in units of Ω_E|sin φ|. Right panel, 'Path "
+                   "missed': the largest distance between the two models' paths, in units of the amplitude A. "
+                   "Filled: measured; hollow: the leading-order expectation where the physics gives one.",
+                   adequacy)
     builder.table(adequacy, "model_adequacy", "Model adequacy per scene", tables.ADEQUACY_NOTES)
 
 
 def _all_runs(builder: _Builder, runs: pd.DataFrame) -> None:
     builder.add(Heading("All runs"), Paragraph(
-        "One row per run with the main columns; the linked files of the second table hold every column of "
-        "foucault_bench.bench.schema."))
-    builder.table(tables.compact_table(runs), "runs_compact", "All runs (main columns)")
+        "One row per run with the main columns, folded in this page: open it and type words to keep the rows "
+        "holding all of them (e.g. `lab rk4 ok`); the CSV link has the same rows. The linked files of the "
+        "second table hold every column of foucault_bench.bench.schema."))
+    builder.table(tables.compact_table(runs), "runs_compact", "All runs (main columns)", collapsible=True)
     full = tables.full_table(runs)
     write_table_files(full, builder.folder, f"{TABLES}/runs_full", "All runs, every column", tables.INTEGER_COLUMNS)
     builder.add(Paragraph(f"Every column: `{TABLES}/runs_full.csv`, `.md`, `.tex`, `.html`."))
@@ -231,7 +249,7 @@ def build_report(inputs: ReportInputs, folder: Path, title: str = "foucault-benc
     if inputs.include_seed:
         builder.add(*seed_blocks(folder, "seed"))
     _all_runs(builder, inputs.runs)
-    builder.progress.close()
+    builder.draw_figures()
     return write_document(folder, title, builder.blocks)
 
 

@@ -265,7 +265,9 @@ def long_time_energy(table: pd.DataFrame, stem: Path) -> Path:
     first = table.iloc[0]
     axes.set_title(f"Long-time energy: {first['config_model']} model, L = {first['config_length_m']:g} m, "
                    f"φ = {first['config_latitude_deg']:g}°, A = {first['config_amplitude_m']:g} m", pad=14)
-    figure.legend(handles=handles + outcome_legend_handles()[:2], loc="outside right upper", fontsize=9)
+    line_kinds = [Line2D([], [], color="grey", linewidth=1.8, label="thick: largest error so far"),
+                  Line2D([], [], color="grey", linewidth=0.5, alpha=0.4, label="faint: error at each output time")]
+    figure.legend(handles=handles + line_kinds + outcome_legend_handles()[:2], loc="outside right upper", fontsize=9)
     return save(figure, stem)
 
 
@@ -355,10 +357,12 @@ def adequacy(table: pd.DataFrame, stem: Path) -> Path:
     panels = figure.subplots(1, 2, sharey=True)
     positions = np.arange(len(rows))
     panel_columns = (
-        ("precession_rate_diff", "expected_rate_diff", "|rate(simpler) − rate(richer)| / (Ω_E |sin φ|)"),
-        ("trajectory_gap", "expected_trajectory_gap", "max |r(simpler) − r(richer)| / A"),
+        ("precession_rate_diff", "expected_rate_diff", "|rate(simpler) − rate(richer)| / (Ω_E |sin φ|)",
+         "Precession rate missed"),
+        ("trajectory_gap", "expected_trajectory_gap", "max |r(simpler) − r(richer)| / A", "Path missed"),
     )
-    for axes, (measured_column, expected_column, label) in zip(panels, panel_columns):
+    for axes, (measured_column, expected_column, label, title) in zip(panels, panel_columns):
+        axes.set_title(title, fontsize=10)
         measured = np.abs(rows[measured_column].to_numpy(dtype=float))
         shown = np.isfinite(measured) & (measured > 0)
         axes.plot(measured[shown], positions[shown], "o", color="#4c72b0", markersize=7, label="measured")

@@ -1,9 +1,10 @@
 """A report as a list of blocks (headings, paragraphs, figures, tables), rendered twice: HTML and Markdown.
 
 One document model keeps index.html and REPORT.md identical in content. Figures are files beside the document
-(``<stem>.png`` and ``<stem>.svg``); tables are embedded (HTML via pandas ``to_html``, Markdown via pandas
-``to_markdown``, which uses ``tabulate``) and written beside it as CSV, Markdown, LaTeX and HTML files
-(``write_table_files``). Paths in blocks are relative to the document's folder, so the folder opens in a
+(``<stem>.png`` and ``<stem>.svg``); tables are embedded (HTML with numbers right-aligned and text wrapped,
+Markdown via pandas ``to_markdown``, which uses ``tabulate``) and written beside it as CSV, Markdown, LaTeX
+(``reports.latex``: pure ASCII, fits a page) and HTML files (``write_table_files``). A long table can be
+``collapsible``: folded in the HTML page, with a filter box (plain JavaScript, no network). Paths in blocks are relative to the document's folder, so the folder opens in a
 browser with no server.
 """
 
@@ -17,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from foucault_bench.reports.latex import latex_table
 
 
 @dataclass
@@ -49,6 +52,8 @@ class Table:
     display: pd.DataFrame
     stem: str
     column_notes: dict[str, str] = field(default_factory=dict)
+    collapsible: bool = False
+    """Fold the table in the HTML page (``<details>``) with a box that filters its rows."""
 
 
 Block = Heading | Paragraph | Figure | Table
@@ -86,8 +91,7 @@ def write_table_files(frame: pd.DataFrame, folder: Path, stem: str, caption: str
     frame.to_csv(target.with_suffix(".csv"), index=False)
     shown = display_frame(frame, integer_columns)
     target.with_suffix(".md").write_text(f"**{caption}**\n\n{markdown_table(shown)}\n", encoding="utf-8")
-    target.with_suffix(".tex").write_text(
-        shown.to_latex(index=False, caption=caption, escape=True, longtable=len(shown) > 40), encoding="utf-8")
+    target.with_suffix(".tex").write_text(latex_table(shown, caption, numeric_columns(shown)), encoding="ascii")
     target.with_suffix(".html").write_text(
         f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>{html.escape(caption)}</title></head>"
         f"<body><h3>{html.escape(caption)}</h3>\n{html_table(shown)}\n</body></html>\n", encoding="utf-8")
@@ -100,10 +104,31 @@ def markdown_table(shown: pd.DataFrame) -> str:
     return shown.to_markdown(index=False, disable_numparse=True)
 
 
+def numeric_columns(shown: pd.DataFrame) -> frozenset[str]:
+    """Columns of a formatted table whose cells are all numbers or '–' (at least one a number)."""
+    def is_number(cell: object) -> bool:
+        try:
+            float(str(cell))
+        except ValueError:
+            return False
+        return True
+
+    return frozenset(str(column) for column in shown.columns
+                     if any(is_number(cell) for cell in shown[column])
+                     and all(is_number(cell) or cell == "–" for cell in shown[column]))
+
+
 def html_table(shown: pd.DataFrame) -> str:
+    """The formatted table as HTML: numeric columns right-aligned (class ``num``), text columns wrapping."""
     if shown.empty:
         return "<p><em>(no rows)</em></p>"
-    return shown.to_html(index=False, escape=True, border=0, classes="data")
+    numeric = numeric_columns(shown)
+    kinds = ["num" if str(column) in numeric else "text" for column in shown.columns]
+    head = "".join(f"<th class='{kind}'>{html.escape(str(column))}</th>" for kind, column in zip(kinds, shown.columns))
+    body = "\n".join("<tr>" + "".join(f"<td class='{kind}'>{html.escape(str(cell))}</td>"
+                                      for kind, cell in zip(kinds, row)) + "</tr>"
+                      for row in shown.itertuples(index=False))
+    return f"<table class='data'>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>"
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -136,7 +161,10 @@ def render_markdown(title: str, blocks: list[Block]) -> str:
                       f"*{block.caption}* ([SVG]({block.stem}.svg))", ""]
         elif isinstance(block, Table):
             links = ", ".join(f"[{kind}]({path})" for kind, path in _table_links(block.stem))
-            lines += [f"**{block.title}** ({links})", "", markdown_table(block.display), ""]
+            table = markdown_table(block.display)
+            if block.collapsible:
+                table = f"<details><summary>show the {len(block.display)} rows</summary>\n\n{table}\n\n</details>"
+            lines += [f"**{block.title}** ({links})", "", table, ""]
             if block.column_notes:
                 lines += ["Columns: " + "; ".join(f"`{name}`: {note}" for name, note in block.column_notes.items()), ""]
     return "\n".join(lines).rstrip() + "\n"
@@ -149,19 +177,41 @@ figure { margin: 1.2em 0; } figure img { max-width: 100%; border: 1px solid #ddd
 figcaption { font-size: 0.92em; color: #444; }
 .table-wrap { overflow-x: auto; margin: 0.6em 0 1.2em 0; }
 table.data { border-collapse: collapse; font-size: 0.85em; }
-table.data th, table.data td { border: 1px solid #ccc; padding: 2px 6px; text-align: left; white-space: nowrap; }
+table.data th, table.data td { border: 1px solid #ccc; padding: 2px 6px; vertical-align: top; }
 table.data th { background: #f0f0f0; }
-table.data td:last-child { white-space: normal; min-width: 22em; }
+table.data .num { text-align: right; white-space: nowrap; font-variant-numeric: tabular-nums; }
+table.data .text { text-align: left; min-width: 5em; max-width: 32em; overflow-wrap: anywhere; }
+details.long-table > summary { cursor: pointer; }
+details.long-table input { margin: 0.5em 0.5em 0.5em 0; }
 .notes { font-size: 0.85em; color: #444; }
 nav ul { columns: 2; font-size: 0.92em; }
 """
 
 
+_FILTER_SCRIPT = """
+function filterRows(input) {
+  var words = input.value.toLowerCase().split(/\\s+/).filter(Boolean);
+  var rows = input.parentNode.querySelectorAll('tbody tr');
+  var shown = 0;
+  rows.forEach(function (row) {
+    var text = row.textContent.toLowerCase();
+    var match = words.every(function (word) { return text.indexOf(word) >= 0; });
+    row.style.display = match ? '' : 'none';
+    if (match) { shown += 1; }
+  });
+  input.nextElementSibling.textContent = words.length ? shown + ' of ' + rows.length + ' rows' : '';
+}
+"""
+"""Filters a collapsible table's rows: a row stays when it contains every word typed (case-insensitive)."""
+
+
 def render_html(title: str, blocks: list[Block]) -> str:
     toc = "".join(f"<li><a href='#{_anchor(b.text)}'>{html.escape(b.text)}</a></li>"
                   for b in blocks if isinstance(b, Heading) and b.level == 2)
+    script = (f"<script>{_FILTER_SCRIPT}</script>"
+              if any(isinstance(block, Table) and block.collapsible for block in blocks) else "")
     parts = [f"<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
-             f"<style>{_STYLE}</style></head><body>", f"<h1>{html.escape(title)}</h1>",
+             f"<style>{_STYLE}</style>{script}</head><body>", f"<h1>{html.escape(title)}</h1>",
              f"<nav><ul>{toc}</ul></nav>"]
     for block in blocks:
         if isinstance(block, Heading):
@@ -175,7 +225,12 @@ def render_html(title: str, blocks: list[Block]) -> str:
         elif isinstance(block, Table):
             links = ", ".join(f"<a href='{path}'>{kind}</a>" for kind, path in _table_links(block.stem))
             parts.append(f"<p><strong>{html.escape(block.title)}</strong> ({links})</p>")
-            parts.append(f"<div class='table-wrap'>{html_table(block.display)}</div>")
+            table = f"<div class='table-wrap'>{html_table(block.display)}</div>"
+            if block.collapsible:
+                table = (f"<details class='long-table'><summary>show the {len(block.display)} rows</summary>"
+                         "<input type='search' placeholder='filter rows: words, all must match' "
+                         "oninput='filterRows(this)'><span class='count'></span>" + table + "</details>")
+            parts.append(table)
             if block.column_notes:
                 notes = "; ".join(f"<code>{html.escape(name)}</code>: {_inline_html(note)}"
                                   for name, note in block.column_notes.items())
