@@ -124,7 +124,8 @@ def html_table(shown: pd.DataFrame) -> str:
         return "<p><em>(no rows)</em></p>"
     numeric = numeric_columns(shown)
     kinds = ["num" if str(column) in numeric else "text" for column in shown.columns]
-    head = "".join(f"<th class='{kind}'>{html.escape(str(column))}</th>" for kind, column in zip(kinds, shown.columns))
+    head = "".join(f"<th class='{kind}'>{html.escape(str(column)).replace('_', '_<wbr>')}</th>"
+                   for kind, column in zip(kinds, shown.columns))  # long column names may break after an _
     body = "\n".join("<tr>" + "".join(f"<td class='{kind}'>{html.escape(str(cell))}</td>"
                                       for kind, cell in zip(kinds, row)) + "</tr>"
                       for row in shown.itertuples(index=False))
@@ -180,7 +181,7 @@ table.data { border-collapse: collapse; font-size: 0.85em; }
 table.data th, table.data td { border: 1px solid #ccc; padding: 2px 6px; vertical-align: top; }
 table.data th { background: #f0f0f0; }
 table.data .num { text-align: right; white-space: nowrap; font-variant-numeric: tabular-nums; }
-table.data .text { text-align: left; min-width: 5em; max-width: 32em; overflow-wrap: anywhere; }
+table.data .text { text-align: left; max-width: 32em; overflow-wrap: break-word; }
 details.long-table > summary { cursor: pointer; }
 details.long-table input { margin: 0.5em 0.5em 0.5em 0; }
 .notes { font-size: 0.85em; color: #444; }

@@ -100,6 +100,7 @@ def test_html_right_aligns_numbers_and_wraps_text() -> None:
     assert numeric_columns(shown) == {"kh", "rate_rad_s", "ok"}
     table = html_table(shown)
     assert "<th class='num'>kh</th>" in table and "<th class='text'>note</th>" in table
+    assert "<th class='num'>rate_<wbr>rad_<wbr>s</th>" in table
     assert "<td class='num'>–</td>" in table and "<td class='text'>pantheon</td>" in table
     page = render_html("t", [Table("t", shown, "tables/t")])
     style = page.split("<style>")[1].split("</style>")[0]
@@ -129,3 +130,22 @@ def test_the_figure_counter_shows_a_total(tmp_path: Path, capsys) -> None:
     builder.draw_figures()
     assert drawn == ["a", "b", "c"]
     assert "| 0/3 [" in capsys.readouterr().err  # the total is known before the first figure is drawn
+
+
+@pytest.mark.skipif(shutil.which("chromium") is None, reason="no headless chromium on this machine")
+def test_the_row_filter_runs_in_a_browser(tmp_path: Path) -> None:
+    """Type two words in the filter of the folded table: only the rows holding both stay shown."""
+    shown = display_frame(tables.compact_table(results_fixture()))
+    typed = ("<script>var box = document.querySelector('details input'); box.value = 'pantheon rk4'; "
+             "filterRows(box);</script></body>")
+    page = tmp_path / "page.html"
+    page.write_text(render_html("t", [Table("All runs", shown, "r", collapsible=True)]).replace("</body>", typed),
+                    encoding="utf-8")
+    dom = subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu",
+                          f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom", page.as_uri()],
+                         capture_output=True, text=True, timeout=120).stdout
+    rows = re.findall(r"<tr( style=\"display: none;\")?>(.*?)</tr>", dom.split("<tbody>")[1])
+    kept = [cells for hidden, cells in rows if not hidden]
+    expected = shown[(shown["scene"] == "pantheon") & (shown["integrator"] == "rk4")]
+    assert len(rows) == len(shown) and len(kept) == len(expected) > 0
+    assert f"{len(expected)} of {len(shown)} rows" in dom
