@@ -418,7 +418,3 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
             solution.streamed = StreamedMetrics(turning_points=turning_points(
                 problem, events[:n_events, 0], events[:n_events, 1], events[:n_events, 2]))
         return solution
-
-    def compile(self, model: Model) -> None:
-        """Compile (or load from numba's cache) the driver for ``model`` with a short run."""
-        compiled_driver(model)
