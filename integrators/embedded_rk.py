@@ -110,8 +110,11 @@ def _larger(a, b):
     return a if a >= b else b
 
 
-def build_driver(acceleration: Callable) -> Callable:
-    """Compile the driver around the model's ``acceleration(x, y, vx, vy, p) -> (ax, ay)``."""
+def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.ndarray, e_low: np.ndarray,
+                 has_low: bool, dense: np.ndarray, stages: int, extra: int, exponent: float,
+                 estimator_order: int) -> Callable:
+    """Compile the driver around the model's ``acceleration(x, y, vx, vy, p) -> (ax, ay)`` for one tableau, whose
+    coefficients numba freezes into the machine code as constants."""
 
     @jit(inline="always")
     def rhs(state, out, row, p):
@@ -198,8 +201,7 @@ def build_driver(acceleration: Callable) -> Callable:
         return math.sqrt(total) / 2.0  # / √n, n = 4
 
     @jit
-    def driver(y0, parameter_vector, t_out, rtol, atol, max_steps, a, b, e, e_low, has_low, dense, stages,
-               extra, exponent, estimator_order, monitor, out, events, k):
+    def driver(y0, parameter_vector, t_out, rtol, atol, max_steps, monitor, out, events, k):
         """Integrate from t = 0 to t_out[-1]; returns (code, t reached, nfev, accepted, rejected, events found,
         output rows written)."""
         p = to_fixed_tuple(parameter_vector, PARAMETER_COUNT)
@@ -361,9 +363,15 @@ def build_driver(acceleration: Callable) -> Callable:
 
 
 @functools.lru_cache(maxsize=None)
-def compiled_driver(model: Model) -> Callable:
-    """The driver for ``model`` (compiled on first use, cached on disk by numba)."""
-    return build_driver(model.numba_acceleration)
+def compiled_driver(model: Model, tableau: ButcherTableau) -> Callable:
+    """The driver for ``model`` and ``tableau`` (compiled on first use, cached on disk by numba)."""
+    low = tableau.secondary_error_weights
+    return build_driver(model.numba_acceleration, np.ascontiguousarray(tableau.extended_a()),
+                        np.asarray(tableau.b, dtype=np.float64), np.asarray(tableau.error_weights, dtype=np.float64),
+                        np.asarray(low if low is not None else tableau.error_weights, dtype=np.float64),
+                        low is not None, np.ascontiguousarray(tableau.dense_matrix()), tableau.stages,
+                        tableau.extra_stages, -1.0 / (tableau.error_estimator_order + 1),
+                        tableau.error_estimator_order)
 
 
 class EmbeddedRungeKutta(AdaptiveIntegrator):
@@ -388,16 +396,6 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
             raise ValueError(f"max_steps must be a positive number of steps, got {max_steps!r}")
         self.max_steps = max_steps
 
-    @functools.cached_property
-    def _coefficients(self) -> tuple:
-        tableau = self.tableau
-        low = tableau.secondary_error_weights
-        return (np.ascontiguousarray(tableau.extended_a()), np.asarray(tableau.b, dtype=np.float64),
-                np.asarray(tableau.error_weights, dtype=np.float64),
-                np.asarray(low if low is not None else tableau.error_weights, dtype=np.float64), low is not None,
-                np.ascontiguousarray(tableau.dense_matrix()), tableau.stages, tableau.extra_stages,
-                -1.0 / (tableau.error_estimator_order + 1), tableau.error_estimator_order)
-
     def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
         params = problem.params
         limit = self.max_steps or step_budget(params, problem.t_end_s)
@@ -405,9 +403,9 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
         periods = problem.t_end_s / params.small_swing_period_s
         events = np.empty((int(2.2 * periods) + 16 if monitor else 0, 3))
         k = np.empty((self.tableau.stages + 1 + self.tableau.extra_stages, STATE_SIZE))
-        code, t_reached, nfev, steps, rejected, n_events, _ = compiled_driver(problem.model)(
+        code, t_reached, nfev, steps, rejected, n_events, _ = compiled_driver(problem.model, self.tableau)(
             problem.initial_state, problem.parameter_vector, problem.t_out, float(tol),
-            absolute_tolerance(params, tol), limit, *self._coefficients, monitor, out, events, k,
+            absolute_tolerance(params, tol), limit, monitor, out, events, k,
         )
         solution = Solution(t=problem.t_out, y=out, nfev=int(nfev), njev=0, steps=int(steps),
                             rejected_steps=int(rejected))

@@ -49,8 +49,6 @@ def assert_same_steps(mine: Solution, theirs: Solution, name: str) -> None:
 @pytest.mark.parametrize("scene_name", sorted(SCENES))
 @pytest.mark.parametrize("name", sorted(PAIRS))
 def test_same_steps_as_scipy_on_every_built_in_scene(name: str, scene_name: str, tol: float) -> None:
-    if name == "dopri5" and tol < 1e-10:
-        pytest.skip("scipy_rk45 at 1e-12 takes ~10⁵ Python-driven steps per scene")
     assert_same_steps(run(name, scene_name, tol), run(PAIRS[name], scene_name, tol), name)
 
 
