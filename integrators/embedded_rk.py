@@ -21,7 +21,8 @@ common.py, ivp.py) step for step, in numba with scalars and arrays allocated onc
   then pairs and singles), the norms as ``np.linalg.norm`` sums them (in order, no fused operations), so that
   with numpy on OpenBLAS's x86-64 kernels every accepted/rejected decision and every step size is bitwise
   scipy's; with another BLAS the same algorithm agrees to round-off.
-* **Output and events**: the continuous extension bᵢ(θ) of the tableau on every output time, and the turning
+* **Output and events**: the continuous extension bᵢ(θ) of the tableau on every output time inside a step
+  (an output time at a step's end, always the final time, gets the step's y_new), and the turning
   points (r·ṙ = xẋ + yẏ crossing from + to −, direction −1 as scipy's event) found by Brent's method on the
   extension with scipy's tolerances 4ε (Brent, Algorithms for Minimization without Derivatives, 1973, ch. 4;
   the iteration of scipy's ``brentq``). Output values agree with scipy's to round-off, not bitwise (scipy
@@ -348,9 +349,13 @@ def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.nda
                 events[n_events, 2] = buffer[1]
                 n_events += 1
             while next_out < n_out and t_out[next_out] <= t:
-                dense_state((t_out[next_out] - t_old) / h, h, y, k, dense, n_rows, weights, buffer)
-                for i in range(STATE_SIZE):
-                    out[next_out, i] = buffer[i]
+                if t_out[next_out] == t:  # the step's own end (always the final time): its state
+                    for i in range(STATE_SIZE):
+                        out[next_out, i] = y_new[i]
+                else:
+                    dense_state((t_out[next_out] - t_old) / h, h, y, k, dense, n_rows, weights, buffer)
+                    for i in range(STATE_SIZE):
+                        out[next_out, i] = buffer[i]
                 next_out += 1
             for i in range(STATE_SIZE):
                 y[i] = y_new[i]
