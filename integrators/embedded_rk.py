@@ -64,7 +64,7 @@ EVENT_MAX_ITERATIONS = 100
 
 CODE_OK, CODE_TOO_SMALL_STEP, CODE_STEP_LIMIT, CODE_NO_PROGRESS = 0, 1, 2, 3
 MESSAGES = {
-    CODE_TOO_SMALL_STEP: "Required step size is less than spacing between numbers.",
+    CODE_TOO_SMALL_STEP: "Required step size is less than spacing between numbers (scipy's message) at t = {t!r} s",
     CODE_STEP_LIMIT: "step limit of {limit} accepted steps reached at t = {t!r} s",
     CODE_NO_PROGRESS: "no progress: the step size fell to zero at t = {t!r} s",
 }
@@ -203,8 +203,7 @@ def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.nda
 
     @jit
     def driver(y0, parameter_vector, t_out, rtol, atol, max_steps, monitor, out, events, k):
-        """Integrate from t = 0 to t_out[-1]; returns (code, t reached, nfev, accepted, rejected, events found,
-        output rows written)."""
+        """Integrate from t = 0 to t_out[-1]; returns (code, t reached, nfev, accepted, rejected, events found)."""
         p = to_fixed_tuple(parameter_vector, PARAMETER_COUNT)
         n_out = t_out.shape[0]
         t_bound = t_out[n_out - 1]
@@ -362,7 +361,7 @@ def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.nda
                 k[0, i] = k[stages, i]
             if finished:
                 break
-        return code, t, nfev, accepted, rejected, n_events, next_out
+        return code, t, nfev, accepted, rejected, n_events
 
     return driver
 
@@ -408,7 +407,7 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
         periods = problem.t_end_s / params.small_swing_period_s
         events = np.empty((int(2.2 * periods) + 16 if monitor else 0, 3))
         k = np.empty((self.tableau.stages + 1 + self.tableau.extra_stages, STATE_SIZE))
-        code, t_reached, nfev, steps, rejected, n_events, _ = compiled_driver(problem.model, self.tableau)(
+        code, t_reached, nfev, steps, rejected, n_events = compiled_driver(problem.model, self.tableau)(
             problem.initial_state, problem.parameter_vector, problem.t_out, float(tol),
             absolute_tolerance(params, tol), limit, monitor, out, events, k,
         )
