@@ -4,8 +4,8 @@ Order 8 with 12 stages per step attempt (the 13th, f(t + h, y_new), is the next 
 from the embedded 5th-order solution and corrected with the 3rd-order one (Hairer, Nørsett & Wanner, Solving
 ODEs I, §II.10), controller exponent −1/8 (scipy's ``error_estimator_order`` = 7). Dense output of order 7
 with three extra stages per step that needs it. Coefficients: Hairer's dop853.f (http://www.unige.ch/~hairer/
-software.html), as in scipy's ``dop853_coefficients.py``; its dense output (``CONTD8``: y_old + θ(F₀ + (1 − θ)
-(F₁ + θ(F₂ + …)))) is expanded here into weights bᵢ(θ), so the tableau validates it like the others.
+software.html), as in scipy's ``dop853_coefficients.py``, with its dense output in Hairer's form (``CONTD8``:
+y_old + θ(F₀ + (1 − θ)(F₁ + θ(F₂ + …)))), which the tableau expands into weights bᵢ(θ) to check its order.
 
 Tolerance mapping: rtol = tol, atol = tol × (R, R, kR, kR) (``integrators.adaptive``), as for ``scipy_dop853``,
 whose steps this integrator reproduces exactly (same nfev, same accepted steps), in compiled code.
@@ -157,30 +157,6 @@ def _row(entries: dict[int, float], length: int) -> tuple[float, ...]:
     return tuple(float(entries.get(j, 0.0)) for j in range(length))
 
 
-def _expand_hairer_dense_output(b: np.ndarray) -> tuple[tuple[float, ...], ...]:
-    """Weights P (16 × 7) with bᵢ(θ) = Σₘ Pᵢₘ θ^(m+1) equal to Hairer's CONTD8 form
-    y_old + θ(F₀ + (1−θ)(F₁ + θ(F₂ + (1−θ)(F₃ + θ(F₄ + (1−θ)(F₅ + θF₆)))))) with F₀ = Δy = hΣbᵢkᵢ,
-    F₁ = hk₁ − Δy, F₂ = 2Δy − h(k₁ + k₁₃) and F₃…F₆ = hΣDᵢkᵢ."""
-    combinations = np.zeros((7, EXTENDED_STAGES))
-    combinations[0, :STAGES] = b
-    combinations[1, :STAGES] = -b
-    combinations[1, 0] += 1.0
-    combinations[2, :STAGES] = 2.0 * b
-    combinations[2, 0] -= 1.0
-    combinations[2, STAGES] -= 1.0
-    for row, entries in DENSE_D.items():
-        combinations[3 + row] = _row(entries, EXTENDED_STAGES)
-    weights = np.zeros((EXTENDED_STAGES, 8))
-    theta, one_minus = np.polynomial.Polynomial([0.0, 1.0]), np.polynomial.Polynomial([1.0, -1.0])
-    multiplier = np.polynomial.Polynomial([1.0])
-    for index in range(7):  # Fᵢ is multiplied by θ^⌈(i+1)/2⌉ (1 − θ)^⌊(i+1)/2⌋
-        multiplier = multiplier * (theta if index % 2 == 0 else one_minus)
-        coefficients = np.zeros(8)
-        coefficients[: multiplier.coef.size] = multiplier.coef
-        weights += np.outer(combinations[index], coefficients)
-    return tuple(tuple(row[1:]) for row in weights)
-
-
 _B = np.array(_row(COUPLING[STAGES], STAGES))
 
 TABLEAU = ButcherTableau(
@@ -195,7 +171,7 @@ TABLEAU = ButcherTableau(
     secondary_error_order=3,
     dense_c=tuple(float(x) for x in NODES[STAGES + 1:]),
     dense_a=tuple(_row(COUPLING[i], EXTENDED_STAGES) for i in range(STAGES + 1, EXTENDED_STAGES)),
-    dense_weights=_expand_hairer_dense_output(_B),
+    dense_hairer=tuple(_row(DENSE_D[r], EXTENDED_STAGES) for r in sorted(DENSE_D)),
     dense_order=7,
     reference="Hairer, Nørsett & Wanner, Solving ODEs I, §II.10 (DOP853); Dormand & Prince, J. Comput. Appl. "
               "Math. 35, 67 (1991)",

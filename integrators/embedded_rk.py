@@ -112,10 +112,13 @@ def _larger(a, b):
 
 
 def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.ndarray, e_low: np.ndarray,
-                 has_low: bool, dense: np.ndarray, stages: int, extra: int, exponent: float,
+                 has_low: bool, dense: np.ndarray, hairer: bool, stages: int, extra: int, exponent: float,
                  estimator_order: int) -> Callable:
     """Compile the driver around the model's ``acceleration(x, y, vx, vy, p) -> (ax, ay)`` for one tableau, whose
-    coefficients numba freezes into the machine code as constants."""
+    coefficients numba freezes into the machine code as constants. ``dense`` is P (rows × degree) or, with
+    ``hairer``, Hairer's D (rows F₃… over the stages)."""
+    n_rows = stages + 1 + extra
+    n_poly = 3 + dense.shape[0] if hairer else dense.shape[1]
 
     @jit(inline="always")
     def rhs(state, out, row, p):
@@ -126,40 +129,77 @@ def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.nda
         out[row, 3] = ay
 
     @jit(inline="always")
-    def dense_state(theta, h, y_old, k, dense, n_rows, weights, out):
-        """y(t_old + θh) = y_old + h Σᵢ bᵢ(θ) kᵢ with bᵢ(θ) = Σₘ Pᵢₘ θ^(m+1), into ``out``."""
-        degree = dense.shape[1]
-        for i in range(n_rows):
-            w = dense[i, degree - 1]
-            for m in range(degree - 2, -1, -1):
-                w = w * theta + dense[i, m]
-            weights[i] = w * theta
-        for component in range(STATE_SIZE):
-            total = 0.0
-            for i in range(n_rows):
-                total += weights[i] * k[i, component]
-            out[component] = y_old[component] + h * total
+    def prepare_dense(h, y_old, y_new, k, poly):
+        """The step's polynomial, as scipy builds its dense output: Q = Kᵀ·P (``RkDenseOutput``) or Hairer's
+        F₀…F₆ (``Dop853DenseOutput``), matrix products summed as OpenBLAS's small dgemm does (in order, fused)."""
+        if hairer:
+            for i in range(STATE_SIZE):
+                delta = y_new[i] - y_old[i]
+                poly[0, i] = delta
+                poly[1, i] = h * k[0, i] - delta
+                poly[2, i] = 2.0 * delta - h * (k[stages, i] + k[0, i])
+                for r in range(dense.shape[0]):
+                    total = 0.0
+                    for j in range(n_rows):
+                        total = fused_multiply_add(dense[r, j], k[j, i], total)
+                    poly[3 + r, i] = h * total
+        else:
+            for m in range(dense.shape[1]):
+                for i in range(STATE_SIZE):
+                    total = 0.0
+                    for j in range(n_rows):
+                        total = fused_multiply_add(k[j, i], dense[j, m], total)
+                    poly[m, i] = total
 
     @jit(inline="always")
-    def radial_at(t, t_old, h, y_old, k, dense, n_rows, weights, buffer):
-        dense_state((t - t_old) / h, h, y_old, k, dense, n_rows, weights, buffer)
+    def dense_state(x, h, y_old, poly, single, out):
+        """y(t_old + xh) into ``out``, in scipy's arithmetic: Hairer's nested form, or y_old + h·Q·(x, x², …) with
+        the product summed as numpy's BLAS sums a matrix times one vector (``single``: one output time or an
+        event, 4 terms as (q₀p₀ + q₂p₂) + (q₁p₁ + q₃p₃)) or times a matrix (several output times: in order, fused)."""
+        if hairer:
+            for i in range(STATE_SIZE):
+                value = 0.0
+                for index in range(n_poly):
+                    value += poly[n_poly - 1 - index, i]
+                    value *= x if index % 2 == 0 else 1.0 - x
+                out[i] = value + y_old[i]
+        else:
+            p0 = x
+            p1 = p0 * x
+            p2 = p1 * x
+            p3 = p2 * x
+            for i in range(STATE_SIZE):
+                if single and n_poly == 4:
+                    total = (poly[0, i] * p0 + poly[2, i] * p2) + (poly[1, i] * p1 + poly[3, i] * p3)
+                else:
+                    total = 0.0
+                    power = 1.0
+                    for m in range(n_poly):
+                        power = power * x
+                        total = fused_multiply_add(poly[m, i], power, total)
+                out[i] = h * total + y_old[i]
+
+    @jit(inline="always")
+    def radial_at(t, t_old, h, y_old, poly, buffer):
+        dense_state((t - t_old) / h, h, y_old, poly, True, buffer)
         return buffer[0] * buffer[2] + buffer[1] * buffer[3]
 
     @jit
-    def event_time(t_old, t_new, h, y_old, k, dense, n_rows, weights, buffer):
-        """Root of r·ṙ on the continuous extension in [t_old, t_new]: scipy's brentq, xtol = rtol = 4ε."""
+    def event_time(t_old, t_new, h, y_old, poly, buffer):
+        """Root of r·ṙ on the dense output in [t_old, t_new]: scipy's brentq (scipy/optimize/Zeros/brentq.c),
+        xtol = rtol = 4ε, at most 100 iterations."""
         xpre, xcur = t_old, t_new
-        fpre = radial_at(xpre, t_old, h, y_old, k, dense, n_rows, weights, buffer)
-        fcur = radial_at(xcur, t_old, h, y_old, k, dense, n_rows, weights, buffer)
+        fpre = radial_at(xpre, t_old, h, y_old, poly, buffer)
+        fcur = radial_at(xcur, t_old, h, y_old, poly, buffer)
+        if fpre * fcur > 0.0:  # no sign change left after round-off (scipy would raise): the nearer end
+            return xpre if abs(fpre) < abs(fcur) else xcur
         if fpre == 0.0:
             return xpre
         if fcur == 0.0:
             return xcur
-        if (fpre < 0.0) == (fcur < 0.0):  # a sign change of the step ends lost to round-off: the nearer end
-            return xpre if abs(fpre) < abs(fcur) else xcur
         xblk, fblk, spre, scur = 0.0, 0.0, 0.0, 0.0
         for _ in range(EVENT_MAX_ITERATIONS):
-            if fpre != 0.0 and fcur != 0.0 and ((fpre < 0.0) != (fcur < 0.0)):
+            if fpre * fcur < 0.0:
                 xblk, fblk = xpre, fpre
                 spre = scur = xcur - xpre
             if abs(fblk) < abs(fcur):
@@ -176,7 +216,8 @@ def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.nda
                     dpre = (fpre - fcur) / (xpre - xcur)
                     dblk = (fblk - fcur) / (xblk - xcur)
                     stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
-                if 2.0 * abs(stry) < min(abs(spre), 3.0 * abs(sbis) - delta):
+                short = abs(spre) if abs(spre) < 3.0 * abs(sbis) - delta else 3.0 * abs(sbis) - delta
+                if 2.0 * abs(stry) < short:
                     spre = scur
                     scur = stry
                 else:
@@ -190,7 +231,7 @@ def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.nda
                 xcur += scur
             else:
                 xcur += delta if sbis > 0.0 else -delta
-            fcur = radial_at(xcur, t_old, h, y_old, k, dense, n_rows, weights, buffer)
+            fcur = radial_at(xcur, t_old, h, y_old, poly, buffer)
         return xcur
 
     @jit
@@ -207,7 +248,6 @@ def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.nda
         p = to_fixed_tuple(parameter_vector, PARAMETER_COUNT)
         n_out = t_out.shape[0]
         t_bound = t_out[n_out - 1]
-        n_rows = stages + 1 + extra
         y = np.empty(STATE_SIZE)
         y_new = np.empty(STATE_SIZE)
         stage_y = np.empty(STATE_SIZE)
@@ -215,7 +255,7 @@ def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.nda
         err = np.empty(STATE_SIZE)
         err_low = np.empty(STATE_SIZE)
         f1 = np.empty((1, STATE_SIZE))
-        weights = np.empty(n_rows)
+        poly = np.empty((n_poly, STATE_SIZE))
         buffer = np.empty(STATE_SIZE)
         for i in range(STATE_SIZE):
             y[i] = y0[i]
@@ -340,21 +380,23 @@ def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.nda
                         stage_y[i] = y[i] + _combine(k, a[st], st, i) * h
                     rhs(stage_y, k, st, p)
                 nfev += extra
+            if needs_dense:
+                prepare_dense(h, y, y_new, k, poly)
             if event_here and n_events < events.shape[0]:
-                te = event_time(t_old, t, h, y, k, dense, n_rows, weights, buffer)
-                dense_state((te - t_old) / h, h, y, k, dense, n_rows, weights, buffer)
+                te = event_time(t_old, t, h, y, poly, buffer)
+                dense_state((te - t_old) / h, h, y, poly, True, buffer)
                 events[n_events, 0] = te
                 events[n_events, 1] = buffer[0]
                 events[n_events, 2] = buffer[1]
                 n_events += 1
-            while next_out < n_out and t_out[next_out] <= t:
-                if t_out[next_out] == t:  # the step's own end (always the final time): its state
-                    for i in range(STATE_SIZE):
-                        out[next_out, i] = y_new[i]
-                else:
-                    dense_state((t_out[next_out] - t_old) / h, h, y, k, dense, n_rows, weights, buffer)
-                    for i in range(STATE_SIZE):
-                        out[next_out, i] = buffer[i]
+            last_out = next_out
+            while last_out < n_out and t_out[last_out] <= t:
+                last_out += 1
+            single = last_out - next_out == 1
+            while next_out < last_out:
+                dense_state((t_out[next_out] - t_old) / h, h, y, poly, single, buffer)
+                for i in range(STATE_SIZE):
+                    out[next_out, i] = buffer[i]
                 next_out += 1
             for i in range(STATE_SIZE):
                 y[i] = y_new[i]
@@ -370,10 +412,11 @@ def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.nda
 def compiled_driver(model: Model, tableau: ButcherTableau) -> Callable:
     """The driver for ``model`` and ``tableau`` (compiled on first use, cached on disk by numba)."""
     low = tableau.secondary_error_weights
+    dense = tableau.dense_matrix() if tableau.dense_hairer is None else np.asarray(tableau.dense_hairer, dtype=np.float64)
     return build_driver(model.numba_acceleration, np.ascontiguousarray(tableau.extended_a()),
                         np.asarray(tableau.b, dtype=np.float64), np.asarray(tableau.error_weights, dtype=np.float64),
                         np.asarray(low if low is not None else tableau.error_weights, dtype=np.float64),
-                        low is not None, np.ascontiguousarray(tableau.dense_matrix()), tableau.stages,
+                        low is not None, np.ascontiguousarray(dense), tableau.dense_hairer is not None, tableau.stages,
                         tableau.extra_stages, -1.0 / (tableau.error_estimator_order + 1),
                         tableau.error_estimator_order)
 

@@ -14,7 +14,9 @@ Layout (scipy's ``RungeKutta`` convention, ``scipy/integrate/_ivp/rk.py``): stag
 and ``b``; stage s + 1 is f(t + h, y_new), the first stage of the next step ("first same as last", FSAL), so the
 error weights ``e`` have s + 1 entries and the embedded solution is (b, 0) − e. Dense output may add stages
 s + 2, … (``dense_c``, ``dense_a``, rows over every earlier stage, e.g. DOP853's three extra stages), and gives
-the weights bᵢ(θ) = Σₖ Pᵢₖ θ^(k+1) of y(t + θh) = y + h Σᵢ bᵢ(θ) kᵢ over all of these stages.
+the weights bᵢ(θ) = Σₖ Pᵢₖ θ^(k+1) of y(t + θh) = y + h Σᵢ bᵢ(θ) kᵢ over all of these stages, either directly
+(``dense_weights``, scipy's ``RkDenseOutput``) or in Hairer's form (``dense_hairer``, DOP853's ``CONTD8``), from
+which the weights are derived for the checks.
 
 Round-off: the coefficients are doubles, so a condition holds to a few units of round-off of the sum of the
 absolute values of its terms, not exactly; ``CONDITION_RTOL`` bounds the residual relative to that sum.
@@ -111,6 +113,9 @@ class ButcherTableau:
             of the error estimate then follows (``error_estimator_order``).
         dense_c, dense_a: extra stages for the dense output (rows over all earlier stages, FSAL stage included).
         dense_weights: P, (s + 1 + extra stages) × degree: bᵢ(θ) = Σₖ Pᵢₖ θ^(k+1).
+        dense_hairer: instead of P, the rows D of Hairer's form y_old + θ(F₀ + (1−θ)(F₁ + θ(F₂ + (1−θ)(F₃ + …))))
+            with F₀ = Δy = y_new − y_old, F₁ = hk₁ − Δy, F₂ = 2Δy − h(k₁ + k_{s+1}) and F₃₊ᵣ = h Σⱼ Dᵣⱼ kⱼ over
+            every stage (Hairer, Nørsett & Wanner I, §II.6; dop853.f, CONTD8).
         dense_order: order of the continuous extension.
         reference: where the coefficients come from.
     """
@@ -122,9 +127,10 @@ class ButcherTableau:
     order: int
     error_weights: tuple[float, ...]
     error_order: int
-    dense_weights: tuple[tuple[float, ...], ...]
     dense_order: int
     reference: str
+    dense_weights: tuple[tuple[float, ...], ...] = ()
+    dense_hairer: tuple[tuple[float, ...], ...] | None = None
     dense_c: tuple[float, ...] = ()
     dense_a: tuple[tuple[float, ...], ...] = ()
     secondary_error_weights: tuple[float, ...] | None = None
@@ -174,7 +180,21 @@ class ButcherTableau:
         return weights
 
     def dense_matrix(self) -> np.ndarray:
-        return np.asarray(self.dense_weights, dtype=np.float64)
+        """P: ``dense_weights``, or the expansion of ``dense_hairer`` into powers of θ."""
+        if self.dense_hairer is None:
+            return np.asarray(self.dense_weights, dtype=np.float64)
+        s, rows = self.stages, self.stages + 1 + self.extra_stages
+        combinations = [np.concatenate([self.b, np.zeros(rows - s)])]
+        combinations.append(-combinations[0] + np.eye(rows)[0])
+        combinations.append(2.0 * combinations[0] - np.eye(rows)[0] - np.eye(rows)[s])
+        combinations += list(np.asarray(self.dense_hairer, dtype=np.float64).reshape(-1, rows))
+        theta, one_minus = np.polynomial.Polynomial([0.0, 1.0]), np.polynomial.Polynomial([1.0, -1.0])
+        multiplier = np.polynomial.Polynomial([1.0])
+        weights = np.zeros((rows, len(combinations) + 1))
+        for index, combination in enumerate(combinations):  # Fᵢ is multiplied by θ^⌈(i+1)/2⌉ (1 − θ)^⌊(i+1)/2⌋
+            multiplier = multiplier * (theta if index % 2 == 0 else one_minus)
+            weights[:, : multiplier.coef.size] += np.outer(combination, multiplier.coef)
+        return weights[:, 1:]
 
     # --- validation -------------------------------------------------------------------------------------------
     def problems(self) -> list[str]:
@@ -192,6 +212,11 @@ class ButcherTableau:
                 raise ValueError(f"a must be {s} × {s}, got shape {a.shape}")
             if extra and dense_a.shape != (extra, s + 1 + extra):
                 raise ValueError(f"dense_a must be {extra} × {s + 1 + extra}, got shape {dense_a.shape}")
+            if (self.dense_hairer is None) == (len(self.dense_weights) == 0):
+                raise ValueError("give the dense output either as dense_weights or as dense_hairer")
+            if self.dense_hairer is not None and np.asarray(self.dense_hairer, dtype=np.float64).shape[1:] != (
+                    s + 1 + extra,):
+                raise ValueError(f"dense_hairer rows must hold {s + 1 + extra} numbers")
             if self.dense_matrix().ndim != 2 or self.dense_matrix().shape[0] != s + 1 + extra:
                 raise ValueError(f"dense_weights must have {s + 1 + extra} rows, got shape {self.dense_matrix().shape}")
         except ValueError as error:

@@ -58,8 +58,8 @@ def _coefficient_fields(tableau: ButcherTableau) -> list[tuple[str, tuple]]:
         values = getattr(tableau, field)
         if values is not None:
             places += [(field, (i,)) for i, v in enumerate(values) if v != 0.0]
-    for field in ("a", "dense_a", "dense_weights"):
-        places += [(field, (i, j)) for i, row in enumerate(getattr(tableau, field)) for j, v in enumerate(row)
+    for field in ("a", "dense_a", "dense_weights", "dense_hairer"):
+        places += [(field, (i, j)) for i, row in enumerate(getattr(tableau, field) or ()) for j, v in enumerate(row)
                    if v != 0.0]
     return places
 
