@@ -6,7 +6,8 @@ last), error estimated against the embedded 4th-order solution, controller expon
 Math. 6, 19 (1980), Table 2, as in scipy's ``RK45``.
 
 Tolerance mapping: rtol = tol, atol = tol × (R, R, kR, kR) (``integrators.adaptive``), as for ``scipy_rk45``,
-whose steps this integrator reproduces exactly (same nfev, same accepted steps), in compiled code.
+whose run this integrator reproduces in compiled code: same steps and nfev, same output states and turning
+points bit for bit where numpy sums on OpenBLAS (``integrators.embedded_rk``).
 
 Stability: explicit, bounded stability region (reaching about 3.3 along the imaginary axis, Hairer, Nørsett &
 Wanner, Solving ODEs I, Fig. II.10.3); on the pendulum the steps are accuracy-limited at every tolerance used

@@ -16,17 +16,16 @@ common.py, ivp.py) step for step, in numba with scalars and arrays allocated onc
 * **Stages**: k₁ is f(t + h, y_new) of the previous step (first same as last): s evaluations per attempt.
   Dense output, needed in a step that holds output times or a turning point, costs the tableau's extra stages
   (3 for DOP853), counted in ``nfev`` exactly as scipy counts them.
-* **Floating point**: each stage combination Σⱼ aᵢⱼkⱼ is summed in the order of the BLAS matrix-vector
-  product scipy calls (``np.dot`` → OpenBLAS ``dgemv_n``: blocks of four terms as two fused multiply-add chains,
-  then pairs and singles), the norms as ``np.linalg.norm`` sums them (in order, no fused operations), so that
-  with numpy on OpenBLAS's x86-64 kernels every accepted/rejected decision and every step size is bitwise
-  scipy's; with another BLAS the same algorithm agrees to round-off.
-* **Output and events**: the continuous extension bᵢ(θ) of the tableau on every output time inside a step
-  (an output time at a step's end, always the final time, gets the step's y_new), and the turning
-  points (r·ṙ = xẋ + yẏ crossing from + to −, direction −1 as scipy's event) found by Brent's method on the
-  extension with scipy's tolerances 4ε (Brent, Algorithms for Minimization without Derivatives, 1973, ch. 4;
-  the iteration of scipy's ``brentq``). Output values agree with scipy's to round-off, not bitwise (scipy
-  evaluates the same polynomials in another arrangement).
+* **Output and events**: the tableau's dense output on every output time, built as scipy builds it (Q = KᵀP and
+  y_old + hQ(x, x², …), ``RkDenseOutput``; or Hairer's nested form, ``Dop853DenseOutput``), and the turning
+  points (r·ṙ = xẋ + yẏ crossing from + to −, direction −1 as scipy's event) found on it by scipy's ``brentq``
+  iteration with its tolerances 4ε (Brent, Algorithms for Minimization without Derivatives, 1973, ch. 4).
+* **Floating point**: every sum is formed in the order numpy's BLAS forms it for scipy: a stage combination
+  Σⱼ aᵢⱼkⱼ as OpenBLAS's ``dgemv_n`` (blocks of four terms as two fused multiply-add chains, then a pair, then a
+  single term), a matrix product as its small ``dgemm`` (one fused chain in order), the dense polynomial at one
+  time as its ``dgemv_t`` ((q₀p₀ + q₂p₂) + (q₁p₁ + q₃p₃)), a norm as ``np.linalg.norm`` (in order, unfused).
+  With numpy on OpenBLAS's x86-64 kernels (the PyPI wheels) every step size, accept/reject decision, output
+  state and turning point is then bitwise scipy's; with another BLAS the same algorithm agrees to round-off.
 
 ``EmbeddedRungeKutta`` is the integrator base: a subclass declares ``tableau`` and its facts and registers.
 """
@@ -412,11 +411,12 @@ def build_driver(acceleration: Callable, a: np.ndarray, b: np.ndarray, e: np.nda
 def compiled_driver(model: Model, tableau: ButcherTableau) -> Callable:
     """The driver for ``model`` and ``tableau`` (compiled on first use, cached on disk by numba)."""
     low = tableau.secondary_error_weights
-    dense = tableau.dense_matrix() if tableau.dense_hairer is None else np.asarray(tableau.dense_hairer, dtype=np.float64)
+    hairer = tableau.dense_hairer is not None
+    dense = np.asarray(tableau.dense_hairer, dtype=np.float64) if hairer else tableau.dense_matrix()
     return build_driver(model.numba_acceleration, np.ascontiguousarray(tableau.extended_a()),
                         np.asarray(tableau.b, dtype=np.float64), np.asarray(tableau.error_weights, dtype=np.float64),
                         np.asarray(low if low is not None else tableau.error_weights, dtype=np.float64),
-                        low is not None, np.ascontiguousarray(dense), tableau.dense_hairer is not None, tableau.stages,
+                        low is not None, np.ascontiguousarray(dense), hairer, tableau.stages,
                         tableau.extra_stages, -1.0 / (tableau.error_estimator_order + 1),
                         tableau.error_estimator_order)
 
