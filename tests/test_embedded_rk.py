@@ -125,3 +125,11 @@ def test_rejections_are_counted_as_scipy_makes_them() -> None:
 @pytest.mark.parametrize("name", ["dopri5", "dop853", "tsit5"])
 def test_declares_a_compiled_cost_basis(name: str) -> None:
     assert get_integrator(name).cost_basis == "compiled"
+
+
+def test_the_perf_section_times_only_pairs_that_take_the_same_steps(monkeypatch: pytest.MonkeyPatch) -> None:
+    from foucault_bench.bench.perf import erk
+
+    monkeypatch.setattr(erk, "PAIRS", {"tsit5": "scipy_rk45"})
+    with pytest.raises(AssertionError, match="different steps"):
+        erk.measure(quick=True)
