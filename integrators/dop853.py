@@ -11,8 +11,9 @@ Tolerance mapping: rtol = tol, atol = tol × (R, R, kR, kR) (``integrators.adapt
 whose run this integrator reproduces in compiled code: same steps and nfev, same output states and turning
 points bit for bit where numpy sums on OpenBLAS (``integrators.embedded_rk``).
 
-Stability: explicit, bounded stability region (reaching about 6 along the imaginary axis); on the pendulum the
-steps are accuracy-limited at every tolerance used here.
+Stability: explicit, bounded stability region. On the undamped oscillator the amplification |R(ikh)|, R(z) =
+1 + z bᵀ(I − zA)⁻¹𝟙 (Hairer & Wanner, Solving ODEs II, §IV.2), stays ≤ 1 (damping) up to kh ≈ 5.96; the steps
+are accuracy-limited at every tolerance used here.
 """
 
 from __future__ import annotations

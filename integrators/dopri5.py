@@ -9,9 +9,10 @@ Tolerance mapping: rtol = tol, atol = tol × (R, R, kR, kR) (``integrators.adapt
 whose run this integrator reproduces in compiled code: same steps and nfev, same output states and turning
 points bit for bit where numpy sums on OpenBLAS (``integrators.embedded_rk``).
 
-Stability: explicit, bounded stability region (reaching about 3.3 along the imaginary axis, Hairer, Nørsett &
-Wanner, Solving ODEs I, Fig. II.10.3); on the pendulum the steps are accuracy-limited at every tolerance used
-here.
+Stability: explicit, bounded stability region. On the undamped oscillator (eigenvalues ±ik) the amplification
+|R(ikh)| with R(z) = 1 + z bᵀ(I − zA)⁻¹𝟙 (Hairer & Wanner, Solving ODEs II, §IV.2) stays ≤ 1 up to kh ≈ 1.0 and
+exceeds 1 beyond (1.4e-6 at kh = 1, 3e-3 at 1.5); the error control keeps that growth below the tolerance, so
+the steps are accuracy-limited at every tolerance used here.
 """
 
 from __future__ import annotations

@@ -10,7 +10,9 @@ compared with ``dopri5`` at identical control.
 
 Tolerance mapping: rtol = tol, atol = tol × (R, R, kR, kR) (``integrators.adaptive``).
 
-Stability: explicit, bounded stability region (reaching about 3.5 along the imaginary axis); on the pendulum
+Stability: explicit, bounded stability region. On the undamped oscillator the amplification |R(ikh)|, R(z) =
+1 + z bᵀ(I − zA)⁻¹𝟙 (Hairer & Wanner, Solving ODEs II, §IV.2), stays ≤ 1 only up to kh ≈ 0.48 and exceeds 1
+slightly beyond (6e-8 at kh = 0.5, 1.3e-4 at 1); the error control keeps that growth below the tolerance, so
 the steps are accuracy-limited at every tolerance used here.
 """
 
