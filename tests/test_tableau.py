@@ -104,3 +104,17 @@ def test_structural_mistakes_are_reported() -> None:
         dataclasses.replace(tableau, b=tableau.b[:5])
     with pytest.raises(ValueError, match="order must be"):
         dataclasses.replace(tableau, order=9)
+
+
+@pytest.mark.parametrize(("name", "stable_up_to", "unstable_at"),
+                         [("dopri5", 0.99, 1.0), ("tsit5", 0.47, 0.5), ("dop853", 5.95, 6.0)])
+def test_imaginary_axis_stability_stated_in_the_docstrings(name: str, stable_up_to: float, unstable_at: float) -> None:
+    """|R(iy)| ≤ 1 on (0, stable_up_to] and > 1 at unstable_at, R(z) = 1 + z bᵀ(I − zA)⁻¹𝟙 (HW II, §IV.2)."""
+    tableau = TABLEAUX[name]
+    a, b, ones = np.asarray(tableau.a), np.asarray(tableau.b), np.ones(tableau.stages)
+
+    def amplification(y: float) -> float:
+        return abs(1.0 + 1j * y * b @ np.linalg.solve(np.eye(tableau.stages) - 1j * y * a, ones))
+
+    assert max(amplification(y) for y in np.linspace(1e-3, stable_up_to, 2000)) <= 1.0 + 1e-13
+    assert amplification(unstable_at) > 1.0 + 1e-9
