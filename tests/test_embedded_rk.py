@@ -133,3 +133,19 @@ def test_the_perf_section_times_only_pairs_that_take_the_same_steps(monkeypatch:
     monkeypatch.setattr(erk, "PAIRS", {"tsit5": "scipy_rk45"})
     with pytest.raises(AssertionError, match="different steps"):
         erk.measure(quick=True)
+
+
+@pytest.mark.parametrize("name", sorted(PAIRS))
+def test_a_failing_run_fails_where_scipy_fails(name: str) -> None:
+    """The finite-time blow-up of tests/test_adaptive.py: the step size collapses at the same step, after the same
+    evaluations, with scipy's message."""
+    from test_adaptive import BLOW_UP, BLOW_UP_SCENE
+
+    from foucault_bench.integrators import Problem
+
+    problem = Problem(BLOW_UP, BLOW_UP_SCENE, np.linspace(0.0, 3.0, 31))
+    mine, theirs = get_integrator(name).solve(problem, tol=1e-8), get_integrator(PAIRS[name]).solve(problem, tol=1e-8)
+    assert mine.status == theirs.status == "failed"
+    assert (mine.nfev, mine.steps) == (theirs.nfev, theirs.steps)
+    assert "Required step size is less than spacing between numbers" in mine.message
+    np.testing.assert_array_equal(np.isnan(mine.y), np.isnan(theirs.y))
