@@ -382,8 +382,9 @@ class InteractiveSimulation:
         self.grids = {grid.attribute: grid for grid in SLIDERS}
         for row, grid in enumerate(SLIDERS):
             slider_axes = figure.add_axes((0.2, 0.22 - 0.05 * row, 0.5, 0.03))
+            start = min(max(getattr(settings, grid.attribute), grid.values[0]), grid.values[-1])  # e.g. rate 0
             slider = Slider(slider_axes, grid.label, grid.position(grid.values[0]), grid.position(grid.values[-1]),
-                            valinit=grid.position(getattr(settings, grid.attribute)))
+                            valinit=grid.position(start))
             slider.on_changed(lambda position, name=grid.attribute: self._changed(name, position))
             self.sliders[grid.attribute] = slider
         self.bound_marks = {name: self.sliders[name].ax.axvline(math.nan, color="#b00000", linewidth=1.5)

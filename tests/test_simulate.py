@@ -199,6 +199,18 @@ def test_off_grid_command_line_values_are_printed_in_full() -> None:
     assert "φ = 48.846°" in view.axes.get_title()
 
 
+def test_command_line_values_outside_a_slider_start_it_at_its_end() -> None:
+    """``--earth-rate 0`` (no rotation) has no place on a log axis: the slider starts at its left end, the
+    simulation and its labels keep 0 until the slider moves."""
+    figure = Figure(figsize=(12, 8))
+    FigureCanvasAgg(figure)
+    simulation = InteractiveSimulation(figure, replace(SMALL, earth_rate_factor=0.0, length_m=150.0, hours=0.02))
+    assert simulation.view.result.expected_rate_rad_s == 0.0
+    assert simulation.sliders["earth_rate_factor"].val == -1.0 and simulation.sliders["length_m"].val == 100.0
+    assert simulation.sliders["earth_rate_factor"].valtext.get_text() == "0"
+    assert "ω = 0 Ω_E" in simulation.view.axes.get_title() and "L = 150.0 m" in simulation.view.axes.get_title()
+
+
 def test_refused_parameters_are_shown_in_full_inside_the_figure(app: InteractiveSimulation) -> None:
     view = app.view
     bad = replace(SMALL, length_m=3.0, amplitude_m=7.25)  # no slider reaches it; the command line refuses it too
