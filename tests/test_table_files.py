@@ -88,7 +88,7 @@ def test_latex_tables_compile_and_fit_the_page(table_folder: Path, tmp_path: Pat
         document.write_text("\\documentclass{article}\n\\usepackage{longtable,array}\n\\begin{document}\n"
                             f"\\input{{{path.as_posix()}}}\n\\end{{document}}\n", encoding="ascii")
         result = subprocess.run(["pdflatex", "-interaction=nonstopmode", "-halt-on-error", document.name],
-                                cwd=tmp_path, capture_output=True, text=True, timeout=120)
+                                cwd=tmp_path, capture_output=True, text=True, timeout=120, check=False)
         log = (tmp_path / f"doc_{path.stem}.log").read_text(encoding="latin-1")
         assert result.returncode == 0, (path.name, log[-2000:])
         assert (tmp_path / f"doc_{path.stem}.pdf").stat().st_size > 0
@@ -143,7 +143,7 @@ def test_the_row_filter_runs_in_a_browser(tmp_path: Path) -> None:
                     encoding="utf-8")
     dom = subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu",
                           f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom", page.as_uri()],
-                         capture_output=True, text=True, timeout=120).stdout
+                         capture_output=True, text=True, timeout=120, check=False).stdout
     rows = re.findall(r"<tr( style=\"display: none;\")?>(.*?)</tr>", dom.split("<tbody>")[1])
     kept = [cells for hidden, cells in rows if not hidden]
     expected = shown[(shown["scene"] == "pantheon") & (shown["integrator"] == "rk4")]
