@@ -124,7 +124,8 @@ def airy_rate(params: PendulumParameters) -> float:
     """Airy's precession rate of a spherical pendulum released from rest, −Ω_E sin φ (1 − (3/8)θ₀²) (rad/s),
     with θ₀ = A/L to this order (G. B. Airy, "On the vibration of a free pendulum in an oval differing little
     from a straight line", Mem. R. Astron. Soc. 20, 121-130, 1851; H. R. Olsson, Am. J. Phys. 49, 531, 1981):
-    the swing's own elliptic precession, (3/8)θ₀² of the Earth's, is subtracted from it."""
+    the Coriolis force opens the swing into a thin ellipse, whose own precession runs against the Earth's by
+    (3/8)θ₀² of it."""
     theta0 = params.amplitude_m / params.length_m
     return params.textbook_precession_rate_rad_s * (1.0 - 0.375 * theta0**2)
 
