@@ -7,8 +7,9 @@ stored tables and computes the missing ones.
 
 * ``long_time_energy``: relative energy error against time for one representative per integrator family
   (Euler grows, RK4 drifts, Verlet stays bounded, CVODE/heyoka near round-off).
-* ``stability_sweep``: max relative energy error over a fixed number of steps against k·h for every
-  fixed-step integrator, across its declared ``stability_limit_kh``.
+* ``stability_sweep``: long runs and the one-step map's growth against k·h for every fixed-step integrator,
+  with and without Earth's rotation: the measured stability limit beside the declared one, and the growth per
+  step where rotation destabilises a method (symplectic Euler) beside its theory.
 * ``precession_vs_latitude``: the swing plane's measured rate for many latitudes at once (one heyoka
   ``taylor_adaptive_batch``, one batch element per latitude), against −Ω_E sin φ and its Airy correction.
 * ``seed_revisited``: the numbers behind the seed note's figures and their corrections (``reports.seed``).
@@ -30,6 +31,7 @@ from tqdm import tqdm
 from foucault_bench.bench.problems.scenes import SEED_EARTH_RATE_RAD_S
 from foucault_bench.bench.run.store import ResultsStore, setting_label
 from foucault_bench.bench.verdicts.columns import energy_scale, energy_verdicts
+from foucault_bench.bench.verdicts.stability import measured_stability_limit, spectral_growth, step_matrix
 from foucault_bench.bench.verdicts.turning_points import precession_rate
 from foucault_bench.integrators import STATUS_OK, Problem, Solution, get_integrator
 from foucault_bench.integrators.registry import REGISTRY
@@ -141,48 +143,67 @@ def long_time_energy(config: LongTimeEnergyConfig = LongTimeEnergyConfig(), prog
 # --------------------------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class StabilitySweepConfig:
-    """Every registered fixed-step integrator on the linear model, ``steps`` steps at each k·h of ``kh``.
+    """Every registered fixed-step integrator on the linear model at each k·h of ``kh``, without Earth's rotation
+    (Ω_E = 0: the undamped oscillator that defines ``stability_limit_kh``) and with it (Ω_E sidereal at
+    ``latitude_deg``).
 
-    The linear model is the oscillator whose eigenvalues ±ik define ``stability_limit_kh`` (PHYSICS.md
-    "Integrators"); its Coriolis term shifts them by a/k ≈ 1e-4 only.
+    Two measurements per point: a long run of ``steps`` steps (its max energy error and whether it diverged),
+    and the growth per step of the scheme's own one-step map (``bench.verdicts.stability``), from which the
+    measured limit is bisected to ``limit_resolution_kh``.
     """
 
     model: str = "linear"
     length_m: float = 10.0
     latitude_deg: float = 48.846
     amplitude_m: float = 1.0
-    steps: int = 1000
-    kh: tuple[float, ...] = tuple(np.round(np.linspace(0.1, 4.0, 40), 6))
+    steps: int = 20_000
+    kh: tuple[float, ...] = (0.01, 0.02, 0.05, *np.round(np.linspace(0.1, 4.0, 40), 6))
+    limit_resolution_kh: float = 1e-4
 
 
 def stability_sweep(config: StabilitySweepConfig = StabilitySweepConfig(), progress: bool = True) -> pd.DataFrame:
-    """Max relative energy error |E − E₀|/E_swing over every step (streamed by the fixed-step loop, scaled as in
-    ``bench.verdicts.columns.energy_verdicts``) after ``steps`` steps, per integrator and k·h.
+    """Long runs and one-step growth across each fixed-step integrator's stability limit, with and without
+    Earth's rotation.
 
-    Columns: integrator, family, stability_limit_kh (NaN when unstable for every h), kh, steps_done,
-    energy_max_rel_error, status, message, plus the config's scalars.
+    Columns: integrator, family, rotation (bool), rate_ratio (a/k with a = Ω_E sin φ; 0 without rotation),
+    stability_limit_kh (declared, NaN when unstable for every h), measured_limit_kh (NaN when the step grows at
+    every k·h of the grid), kh, steps_done, energy_max_rel_error (max |E − E₀|/E_swing over the run's steps, as
+    in ``bench.verdicts.columns.energy_verdicts``), growth_per_step (measured: max |λ| − 1 of the one-step map),
+    growth_theory (``Integrator.rotation_growth_per_step`` − 1 where the method declares one, else NaN),
+    status, message, plus the config's scalars.
     """
     model = get_model(config.model)
-    params = PendulumParameters(length_m=config.length_m, latitude_deg=config.latitude_deg,
-                                amplitude_m=config.amplitude_m)
-    k = params.pendulum_frequency_rad_s
     fixed_step = sorted(name for name, integrator in REGISTRY.items() if not integrator.adaptive)
+    cases = [(name, rotation) for name in fixed_step for rotation in (False, True)]
     rows = []
-    for name, kh in _progress([(n, kh) for n in fixed_step for kh in config.kh], "stability sweep", progress):
+    for name, rotation in _progress(cases, "stability sweep", progress):
         integrator = REGISTRY[name]
-        step_s = kh / k
-        problem = Problem(model=model, params=params, t_out=np.linspace(0.0, config.steps * step_s, 11))
-        solution = integrator.solve(problem, step_s=step_s)
-        rows.append({
-            "integrator": name,
-            "family": integrator.family,
-            "stability_limit_kh": np.nan if integrator.stability_limit_kh is None else integrator.stability_limit_kh,
-            "kh": float(kh),
-            "steps_done": solution.steps,
-            "energy_max_rel_error": energy_verdicts(model, params, solution)["energy_max_rel_error_steps"],
-            "status": solution.status,
-            "message": solution.message,
-        })
+        params = PendulumParameters(length_m=config.length_m, latitude_deg=config.latitude_deg,
+                                    amplitude_m=config.amplitude_m,
+                                    earth_rate_rad_s=SIDEREAL_EARTH_RATE_RAD_S if rotation else 0.0)
+        k = params.pendulum_frequency_rad_s
+        rate_ratio = params.vertical_rate_rad_s / k
+        measured = measured_stability_limit(integrator, params, np.asarray(config.kh), config.limit_resolution_kh)
+        for kh in config.kh:
+            step_s = float(kh) / k
+            problem = Problem(model=model, params=params, t_out=np.linspace(0.0, config.steps * step_s, 11))
+            solution = integrator.solve(problem, step_s=step_s)
+            theory = integrator.rotation_growth_per_step(float(kh), rate_ratio) if rotation else None
+            rows.append({
+                "integrator": name,
+                "family": integrator.family,
+                "rotation": rotation,
+                "rate_ratio": rate_ratio,
+                "stability_limit_kh": np.nan if integrator.stability_limit_kh is None else integrator.stability_limit_kh,
+                "measured_limit_kh": measured,
+                "kh": float(kh),
+                "steps_done": solution.steps,
+                "energy_max_rel_error": energy_verdicts(model, params, solution)["energy_max_rel_error_steps"],
+                "growth_per_step": spectral_growth(step_matrix(integrator, params, step_s)),
+                "growth_theory": np.nan if theory is None else theory - 1.0,
+                "status": solution.status,
+                "message": solution.message,
+            })
     return _with_config_columns(pd.DataFrame(rows), config, exclude=("kh",))
 
 

@@ -59,6 +59,11 @@ SWEEPS = {  # steps per period: powers of two chosen so that ≥ 3 points fall i
     "symplectic_euler": 2 ** np.arange(8, 15),
     "rk4": 2 ** np.arange(4, 10),
     "verlet": 2 ** np.arange(5, 12),
+    "boris": 2 ** np.arange(5, 12),
+    "implicit_midpoint": 2 ** np.arange(5, 12),
+    "yoshida4": 2 ** np.arange(4, 10),
+    "gauss_legendre4": 2 ** np.arange(3, 9),
+    "composition6": 2 ** np.arange(3, 8),
 }
 
 

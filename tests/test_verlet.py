@@ -1,9 +1,5 @@
-"""The rotating-frame Verlet is symplectic, keeps the sphere's invariants, and gets the precession right.
-
-Symplecticity is checked on its one-step map Φ in canonical coordinates (r, p), p = ṙ + ω_c×r: the Jacobian
-M = ∂Φ/∂(r, p) must satisfy Mᵀ J M = J (Hairer, Lubich & Wanner, Geometric Numerical Integration, Def. VI.2.2).
-The same check on RK4 (not symplectic) must fail, so the test can tell the difference.
-"""
+"""The rotating-frame Verlet keeps the sphere's invariants and gets the precession right (its symplecticity is
+checked with every other declared-symplectic method in ``tests/test_structure.py``)."""
 
 from __future__ import annotations
 
@@ -12,45 +8,8 @@ import pytest
 
 from foucault_bench.integrators import Problem, get_integrator
 from foucault_bench.models import MODELS, PendulumParameters
-from foucault_bench.models.parameters import P_OMEGA_Z
 
 PARIS = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
-J = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.eye(2), np.zeros((2, 2))]])
-
-
-def _canonical_step(integrator_name: str, params: PendulumParameters, h: float):
-    """One step as a map of planar canonical coordinates (x, y, p_x, p_y), p = v + a ẑ×r."""
-    model = MODELS["linear"]
-    step = get_integrator(integrator_name).make_step(model)
-    p = params.parameter_vector()
-    a = p[P_OMEGA_Z]
-
-    def canonical_map(z: np.ndarray) -> np.ndarray:
-        x, y, px, py = z
-        xn, yn, vxn, vyn = step(x, y, px + a * y, py - a * x, h, p)
-        return np.array([xn, yn, vxn - a * yn, vyn + a * xn])
-
-    return canonical_map
-
-
-def _symplecticity_defect(integrator_name: str, h: float) -> float:
-    canonical_map = _canonical_step(integrator_name, PARIS, h)
-    z0 = np.array([0.7, 2.1, -0.2, 0.15])
-    scale = np.array([1.0, 1.0, 0.4, 0.4])
-    jacobian = np.empty((4, 4))
-    for j in range(4):  # central differences, truncation ~ δ² × third derivative: the maps are (nearly) linear
-        dz = np.zeros(4)
-        dz[j] = 1e-5 * scale[j]
-        jacobian[:, j] = (canonical_map(z0 + dz) - canonical_map(z0 - dz)) / (2 * dz[j])
-    return float(np.max(np.abs(jacobian.T @ J @ jacobian - J)))
-
-
-def test_verlet_one_step_map_is_symplectic_and_rk4_is_not() -> None:
-    k = PARIS.pendulum_frequency_rad_s
-    h = 0.5 / k
-    assert _symplecticity_defect("verlet", h) < 1e-9
-    # RK4's defect is of the size of its error constant: 1 − |R(ikh)|² ≈ (kh)⁶/72 ≈ 2e-4 at kh = 0.5
-    assert _symplecticity_defect("rk4", h) > 1e-5
 
 
 def _fitted_precession_rate(turning: np.ndarray) -> float:
