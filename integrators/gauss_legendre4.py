@@ -17,7 +17,7 @@ from foucault_bench.integrators.registry import register
 class GaussLegendre4(GaussCollocation):
     name: ClassVar[str] = "gauss_legendre4"
     order: ClassVar[int] = 4
-    stages: ClassVar[int] = 2
+    collocation_stages: ClassVar[int] = 2
     stability_limit_kh: ClassVar[float] = 2.0 * math.sqrt(3.0)
     reference: ClassVar[str] = (
         "Butcher, Math. Comp. 18, 50 (1964); Hairer, Lubich & Wanner, Geometric Numerical Integration, "

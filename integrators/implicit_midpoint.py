@@ -16,7 +16,7 @@ from foucault_bench.integrators.registry import register
 class ImplicitMidpoint(GaussCollocation):
     name: ClassVar[str] = "implicit_midpoint"
     order: ClassVar[int] = 2
-    stages: ClassVar[int] = 1
+    collocation_stages: ClassVar[int] = 1
     stability_limit_kh: ClassVar[float] = 2.0
     reference: ClassVar[str] = (
         "Hairer, Lubich & Wanner, Geometric Numerical Integration, 2nd ed., §I.1.3, §VI.3, §VIII.6"
