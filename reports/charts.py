@@ -381,6 +381,37 @@ def precession_latitude(table: pd.DataFrame, stem: Path) -> Path:
     return save(figure, stem)
 
 
+def release_azimuth(table: pd.DataFrame, stem: Path) -> Path:
+    """Precession-rate error (relative to Ω_E) against the release azimuth, one panel per latitude, one line per
+    integrator (log scale)."""
+    latitudes = sorted(table["latitude_deg"].unique(), reverse=True)
+    figure = Figure(figsize=(12, 4.6), layout="constrained")
+    panels = np.atleast_1d(figure.subplots(1, len(latitudes), sharey=True, squeeze=False)).ravel()
+    handles = {}
+    for axes, latitude in zip(panels, latitudes):
+        rows = table[table["latitude_deg"] == latitude]
+        for (integrator, family), sweep in rows.groupby(["integrator", "family"], sort=True):
+            sweep = sweep.sort_values("release_azimuth_deg")
+            style = integrator_style(integrator, family)
+            ok = (sweep["status"] == STATUS_OK).to_numpy()
+            (line,) = axes.plot(sweep["release_azimuth_deg"].to_numpy()[ok],
+                                np.maximum(sweep["error_earth"].to_numpy(dtype=float)[ok], LOG_FLOOR),
+                                color=style["color"], marker=style["marker"], markersize=4, label=integrator)
+            handles[integrator] = line
+        set_log_scales(axes, x=False)
+        axes.set_xticks(np.arange(0, 181, 45))
+        axes.set_xlabel("release azimuth (° from South towards East)")
+        axes.set_title(f"φ = {latitude:g}°", pad=10)
+        axes.grid(True, which="major", alpha=0.3)
+    panels[0].set_ylabel("|rate − reference rate| / Ω_E")
+    figure.legend(handles=list(handles.values()), loc="outside right upper", fontsize=9)
+    first = table.iloc[0]
+    figure.suptitle(f"Precession error against release direction (0° = North-South swing, 90° = East-West): "
+                    f"{first['config_model']} model, L = {first['config_length_m']:g} m, "
+                    f"A = {first['config_amplitude_m']:g} m, kh = {first['kh']:g}, {first['config_duration_s']:g} s")
+    return save(figure, stem)
+
+
 def adequacy(table: pd.DataFrame, stem: Path) -> Path:
     """Per scene, what each simpler model gets wrong against the richer one (``bench.problems.adequacy``): |precession
     rate difference| in units of Ω_E|sin φ| and trajectory gap in units of A, measured (filled) next to the
