@@ -172,3 +172,12 @@ def test_ensure_studies_computes_missing_tables_once_and_reads_them_back() -> No
     assert (again["study_stability"]["kh"] == -1.0).all()  # read back, not recomputed
     recomputed = ensure_studies(store, recompute=True, configs=small, progress=False)
     pd.testing.assert_frame_equal(recomputed["study_stability"], first["study_stability"])  # deterministic
+
+
+def test_precession_study_runs_on_a_model_that_reads_fewer_parameters() -> None:
+    """The linear model never reads the centrifugal switch, so heyoka takes one parameter fewer than the vector
+    holds (``Model.heyoka_parameters``); its swing plane turns at exactly −Ω_E sin φ (the closed form)."""
+    config = PrecessionLatitudeConfig(model="linear", duration_s=300.0, n_latitudes=3, amplitude_m=1.0, length_m=10.0)
+    table = precession_vs_latitude(config, progress=False)
+    tolerance = 3.0 * table["rate_stderr_rad_s"] + 1e-9 * SIDEREAL_EARTH_RATE_RAD_S
+    assert np.all(np.abs(table["rate_rad_s"] - table["textbook_rate_rad_s"]) <= tolerance)
