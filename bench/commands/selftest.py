@@ -17,6 +17,10 @@ from foucault_bench.bench.errors import InputError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.epilog = ("Checks, one line each: the declared order on every model (fixed-step methods), bounded "
+                     "just below and diverged just above a declared stability limit, counters, turning points, "
+                     "and a divergence and a failure returned as rows. Exit status 0 when all hold, 1 when one "
+                     "fails, 2 on bad input.")
     parser.add_argument("name", metavar="NAME", help="the registered name of the integrator to check")
     parser.add_argument("--plugin", metavar="MODULE", action="append", default=[],
                         help="import MODULE first (it registers the integrator); looked up in the current "
