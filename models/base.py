@@ -113,7 +113,8 @@ class Model:
         name: registry key (``models.get_model``).
         title: one line for tables and charts.
         geometry: ``"plane"`` or ``"sphere"``.
-        free_force: the model's force source (see module docstring).
+        free_force: the model's force source (module docstring, "Writing a source"); a helper it calls is
+            decorated with ``models.jit.jitable`` and takes the math namespace ``m`` first.
         energy: source of the conserved quantity (J/kg), or of the monitored energy where none is conserved.
         energy_name: formula of ``energy`` for tables.
         conserves_energy: whether ``energy`` is an exact invariant of the model.

@@ -111,3 +111,17 @@ def test_the_project_suite_still_passes_with_the_plug_in_installed(site: Path) -
                  "tests/test_fixed_step.py", "tests/test_selftest.py", "tests/test_adaptive.py::test_declares_its_facts",
                  "tests/test_adaptive.py::test_the_library_drivers_are_discovered")
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-2000:]
+
+
+def test_a_broken_entry_point_plug_in_is_reported_not_fatal(tmp_path: Path) -> None:
+    dist_info = tmp_path / "broken_plugin-0.1.dist-info"
+    dist_info.mkdir()
+    (dist_info / "METADATA").write_text("Metadata-Version: 2.1\nName: broken-plugin\nVersion: 0.1\n", encoding="utf-8")
+    (dist_info / "entry_points.txt").write_text("[foucault_bench.integrators]\nbroken = no_such_plugin_module\n",
+                                                encoding="utf-8")
+    probe = ("from foucault_bench.integrators import REGISTRY\n"
+             "from foucault_bench.integrators.registry import ENTRY_POINT_ERRORS\n"
+             "print('rk4' in REGISTRY, sorted(ENTRY_POINT_ERRORS))")
+    result = run(tmp_path, "-c", probe)
+    assert result.returncode == 0 and result.stdout.split() == ["True", "['broken']"], result.stdout + result.stderr
+    assert "integrator plug-in 'broken'" in result.stderr and "No module named 'no_such_plugin_module'" in result.stderr
