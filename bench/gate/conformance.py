@@ -48,7 +48,8 @@ from foucault_bench.models.parameters import P_K2, P_LENGTH
 
 ORDER_TOLERANCE = 0.15
 """|observed − declared order| allowed. The fit over the finest points still carries the next error term,
-relatively O(kh) smaller; the built-in methods land within 0.05 (tests/test_fixed_step.py)."""
+relatively O(kh) smaller: measured on the built-in methods, every model, |observed − declared| ≤ 0.06 (RK4 3.94);
+a wrong method is off by a whole order or more (the mutants of tests/check_mutants.py: 1.9 for 4, 1.0 for 2)."""
 
 START_KH = 0.5
 MAX_ERROR = 0.1
