@@ -1,6 +1,6 @@
 """The integrator interface: one small base class, a problem, a solution, counters kept by the framework.
 
-Adding an integrator (see README "Adding an integrator"): subclass ``Integrator`` (or ``FixedStepIntegrator``
+Adding an integrator (see integrators/README.md "Adding an integrator"): subclass ``Integrator`` (or ``FixedStepIntegrator``
 for a compiled fixed-step scheme) in a file of its own, set the class attributes that describe it, implement
 ``_solve`` (or ``make_step``), and decorate the class with ``integrators.register``. The framework then
 

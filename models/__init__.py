@@ -1,4 +1,4 @@
-"""Foucault-pendulum models (PHYSICS.md "Models"): a registry from name to ``Model``.
+"""Foucault-pendulum models (models/README.md "The three models"): a registry from name to ``Model``.
 
 Add a model by writing a module with a ``free_force`` and an ``energy`` source and a ``MODEL`` object, and
 listing it here; every integrator then runs it.

@@ -2,12 +2,13 @@
 
     foucault-bench seed [--out DIR]
 
-The seed note (shared/seed, Spanish) shows four figures: the first 2 minutes of its approximate analytic
-solution (eqs. 14-15, ω = 2π/24 h), its Euler solution of eqs. 4-5, that solution's relative energy error, and
-the numeric-minus-analytic difference. Each is redrawn here as the seed made it (with stated assumptions where the
-note gives no numbers) beside a corrected figure, and followed by one paragraph saying which claim holds and
-which does not, with numbers. The computations are ``reports.studies.seed_revisited`` (the suite's integrators
-and ``models.analytic``); this module only plots and writes. ``seed_blocks`` is also the report's section.
+The seed note (Spanish; summarised in reports/README.md "The seed note") shows four figures: the first 2 minutes
+of its approximate analytic solution (eqs. 14-15, ω = 2π/24 h), its Euler solution of eqs. 4-5, that solution's
+relative energy error, and the numeric-minus-analytic difference. Each is redrawn here as the seed made it (with
+stated assumptions where the note gives no numbers) beside a corrected figure, and followed by one paragraph
+saying which claim holds and which does not, with numbers. The computations are ``reports.studies.seed_revisited``
+(the suite's integrators and ``models.analytic``); this module only plots and writes. ``seed_blocks`` is also the
+report's section.
 """
 
 from __future__ import annotations
@@ -218,7 +219,7 @@ def _findings(study: SeedStudy) -> dict[str, str]:
             f"seed's ({n['centrifugal_seed_x_m_s2']:.3g}, {n['centrifugal_seed_y_m_s2']:.3g}, 0). "
             f"**Holds:** the term is negligible, {n['centrifugal_over_gravity']:.1e} g here, as the seed says. "
             "Separately, eqs. 4-5 keep ω-terms about 100× smaller than the geometric nonlinearity of the swing "
-            "they drop (PHYSICS.md 'Models' 3): the suite's spherical model keeps both."),
+            "they drop (docs/models/README.md \"The seed's planar model\"): the suite's spherical model keeps both."),
     }
 
 
@@ -231,7 +232,8 @@ def seed_blocks(folder: Path, prefix: str) -> list[Block]:
     blocks: list[Block] = [
         Heading("The seed note revisited"),
         Paragraph(
-            "The seed note (shared/seed) solves the Foucault pendulum with an approximate analytic solution "
+            "The seed note (in Spanish; summarised in docs/reports/README.md \"The seed note\") solves the Foucault "
+            "pendulum with an approximate analytic solution "
             "(its eqs. 14-15) and explicit Euler on its eqs. 4-5. It gives ω = 2π/24 h and a 2-minute window but "
             f"no length, amplitude, latitude or step; we assume L = {c.length_m:g} m, y₀ = {c.amplitude_m:g} m, "
             f"latitude {c.latitude_deg:g}° (the seed's colatitude λ = {90 - c.latitude_deg:g}°), release from rest "

@@ -1,8 +1,9 @@
 """Fixed-step schemes: observed convergence order, linear stability limits, Euler's energy growth, streaming.
 
-Theory (PHYSICS.md "Integrators"; Hairer, Nørsett & Wanner, Solving ODEs I, §IV.2): on ẍ = −k²x explicit
-Euler multiplies the energy by exactly (1 + (kh)²) per step; RK4 is stable for kh ≤ 2√2; Störmer–Verlet for
-kh < 2. At the equator the linear model has a = Ω_E sin 0 = 0 and is exactly that oscillator (in 2-D).
+Theory (integrators/README.md "Fixed-step methods on this problem"; Hairer & Wanner, Solving ODEs II, §IV.2): on
+ẍ = −k²x explicit Euler multiplies the energy by exactly (1 + (kh)²) per step; RK4 is stable for kh ≤ 2√2;
+Störmer–Verlet for kh < 2. At the equator the linear model has a = Ω_E sin 0 = 0 and is exactly that oscillator
+(in 2-D).
 """
 
 from __future__ import annotations
@@ -126,7 +127,8 @@ def test_output_grid_stride_and_counters(integrator_name: str) -> None:
 
 
 def test_turning_points_are_streamed_on_the_textbook_azimuth() -> None:
-    """RK4 on the linear model: turning points every half period on azimuth ψ₀ − a t (PHYSICS.md)."""
+    """RK4 on the linear model: turning points every half period on azimuth ψ₀ − a t (models/README.md
+    "Closed forms")."""
     period = PARIS.small_swing_period_s
     problem = Problem(MODELS["linear"], PARIS, np.linspace(0.0, 50 * period, 51))
     solution = get_integrator("rk4").solve(problem, step_s=period / 400)

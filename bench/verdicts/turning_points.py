@@ -112,7 +112,8 @@ def precession_rate(turning_points: np.ndarray) -> tuple[float, float]:
     seen from above); consecutive turning points lie at opposite ends of the swing, ψ and ψ + π, so 2ψ is
     unwrapped and halved; the rate is the least-squares slope of ψ against t, computed on centred data, with
     the usual standard error √(Σ residual² / (N − 2) / Σ(t − t̄)²) (e.g. NIST/SEMATECH e-Handbook of
-    Statistical Methods, §4.1.4.1; PHYSICS.md "Measuring the precession rate"). NaN with fewer than 3 points.
+    Statistical Methods, §4.1.4.1; integrators/README.md "Measuring the precession rate"). NaN with fewer than 3
+    points.
     """
     points = np.asarray(turning_points, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] < 3:
