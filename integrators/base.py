@@ -1,8 +1,9 @@
 """The integrator interface: one small base class, a problem, a solution, counters kept by the framework.
 
-Adding an integrator (see integrators/README.md "Adding an integrator"): subclass ``Integrator`` (or ``FixedStepIntegrator``
-for a compiled fixed-step scheme) in a file of its own, set the class attributes that describe it, implement
-``_solve`` (or ``make_step``), and decorate the class with ``integrators.register``. The framework then
+Adding an integrator (see integrators/README.md "Adding an integrator"): subclass ``Integrator`` (or
+``FixedStepIntegrator`` for a compiled fixed-step scheme) in a file of its own, set the class attributes that
+describe it, implement ``_solve`` (or ``make_step``), and decorate the class with ``integrators.register``. The
+framework then
 
 * validates the setting (a step size in s for fixed-step methods, a tolerance in (0, 1) for adaptive ones),
 * turns every exception into a ``failed`` solution with the exception's message, and every non-finite
