@@ -185,7 +185,7 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
             "Taylor batch integrator, one batch element per latitude; study `study_precession_latitude`) against "
             "the textbook −Ω_E sin φ. The residual follows the Airy correction (3/8)θ₀² of the finite swing "
             f"(θ₀ = A/L = {first['config_amplitude_m'] / first['config_length_m']:.3g}); the largest distance from "
-            f"it is {residual:.2g} Ω_E (release-side terms, docs/models/README.md "Airy precession")."))
+            f"it is {residual:.2g} Ω_E (release-side terms, docs/models/README.md \"Airy precession\")."))
         builder.figure(charts.precession_latitude, "study_precession_latitude",
                        "Precession rate against latitude; residual from −Ω_E sin φ in units of Ω_E.", precession)
 
