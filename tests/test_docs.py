@@ -31,6 +31,8 @@ CITATION = re.compile(
     r"((?:docs/)?(?:models|integrators|bench|reports)/README\.md)[`)\]]*[ ,]*(?:\\?\"([^\"\\]+)\\?\"|'([^']+)')")
 MARKDOWN_LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
 CODE_SPAN = re.compile(r"`([^`\s]+)`")
+PLACEHOLDER = re.compile(r"\b(NAME|FILE|DIR|PATH|MODULE|ID)\b")
+"""Upper-case words in a documented path stand for the reader's own name (``integrators/NAME.py``)."""
 FORBIDDEN = re.compile("|".join(["PHYS" + "ICS", "sha" + "red/", r"\.\./" + "seed"]))
 """Names of files outside the repository that the project once cited (built from pieces, so this file is clean)."""
 
@@ -114,7 +116,7 @@ def test_relative_links_and_cited_paths_exist() -> None:
                 missing.append(f"{doc.relative_to(ROOT)}: link {target}")
         for span in CODE_SPAN.findall(text):
             path = span.rstrip(".,:;")
-            if "/" not in path or not re.search(r"\.(py|toml|md|c|txt)$|/$", path):
+            if "/" not in path or not re.search(r"\.(py|toml|md|c|txt)$|/$", path) or PLACEHOLDER.search(path):
                 continue
             bases = [base for base in (doc.parent, ROOT) if (base / path.split("/")[0]).exists()]
             if bases and not any(list(base.glob(path.rstrip("/"))) for base in bases):
