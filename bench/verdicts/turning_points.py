@@ -1,7 +1,7 @@
 """Turning points of the swing and the precession rate measured from them, with the interpolation's error
 bounds (``bench.verdicts.columns`` turns them into verdict columns).
 
-Turning points (maxima of the radius) are located on a quintic Hermite interpolant of the output grid
+Turning points (maxima of the radius) are located on a local Hermite interpolant of the output grid
 (positions, velocities, and accelerations from the model); their azimuths ψ are unwrapped as 2ψ, halved, and
 fitted by a straight line in t. The same procedure serves every integrator and the reference.
 """
