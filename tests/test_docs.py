@@ -43,7 +43,7 @@ def toml_examples(path: Path) -> list[tuple[str, str, str]]:
     for number, text in enumerate(TOML_BLOCK.findall(path.read_text(encoding="utf-8")), start=1):
         marker = EXAMPLE_NAME.search(text)
         document = tomllib.loads(text)  # every block is valid TOML, whatever it is
-        if text.startswith("# fragment"):  # part of a file, shown next to what completes it
+        if text.lstrip().startswith("# fragment"):  # part of a file, shown next to what completes it
             continue
         if marker:
             kind, name = marker.groups()
@@ -109,6 +109,8 @@ def test_relative_links_and_cited_paths_exist() -> None:
     missing = []
     for doc in DOCS + (ROOT / "bench" / "PERF.md",):
         text = doc.read_text(encoding="utf-8")
+        # a recipe ("Adding a model") names the files the reader is about to create: not checked
+        text = "".join(part for part in re.split(r"(?m)^(?=#+ )", text) if not re.match(r"#+ Adding ", part))
         for target in MARKDOWN_LINK.findall(text):
             if re.match(r"^[a-z]+:", target) or target.startswith("#"):
                 continue
