@@ -51,6 +51,8 @@ ERROR_METRICS: dict[str, ErrorMetric] = {
         ErrorMetric("precession_rate_ref_error", "precession-rate error", lambda model: True, ""),
         ErrorMetric("energy_max_rel_error", "energy error", _conserves_energy,
                     "the model conserves no energy, so the energy error measures the model, not the run"),
+        ErrorMetric("energy_drift_per_s", "energy drift (1/s)", _conserves_energy,
+                    "the model conserves no energy, so the energy drift measures the model, not the run"),
         ErrorMetric("analytic_gap_exact", "analytic gap", lambda model: model == "linear",
                     "the exact solution is the linear model's: for another model the gap measures the model"),
     )

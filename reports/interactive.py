@@ -1,0 +1,309 @@
+"""The report's interactive charts: plotly figures for index.html, drawn from the same data as ``reports.charts``.
+
+Each function returns a ``plotly.graph_objects.Figure`` (plotly: https://plotly.com/python/); the document
+embeds its JSON and plotly.js is written beside index.html (``PLOTLY_JS``), so the page opens offline. In every
+chart of results rows, hovering a point shows the run (integrator, family, setting, error, CPU and wall time,
+right-hand-side evaluations, steps, status); clicking a legend entry hides that integrator, clicking the
+"all <family>" entry hides or shows the whole family (``LEGEND_SCRIPT``); axes are logarithmic. Colours,
+markers and dashes follow ``reports.charts`` (colour = family, marker = integrator, solid = fixed step,
+dashed = tolerance sweep). Diverged and failed runs are drawn above the data (▲, ✕) at their cost.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import plotly.graph_objects as go
+from plotly.subplots import make_subplots
+
+from foucault_bench.bench.run.store import setting_label
+from foucault_bench.integrators import STATUS_DIVERGED, STATUS_OK
+from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
+from foucault_bench.reports import charts
+
+PLOTLY_JS = "plotly.min.js"
+"""File name of plotly.js in the report folder."""
+
+SYMBOLS = {"o": "circle", "s": "square", "D": "diamond", "v": "triangle-down", "P": "cross", "*": "star",
+           "h": "hexagon", "<": "triangle-left", ">": "triangle-right", "p": "pentagon"}
+"""matplotlib marker (``charts.INTEGRATOR_MARKERS``) → plotly symbol."""
+
+
+def _dash(linestyle: object) -> str:
+    """plotly dash of a ``charts`` line style: solid family for fixed steps, dashed family for tolerances."""
+    for styles, dashes in ((charts.FIXED_STEP_LINESTYLES, ("solid", "dashdot", "dot")),
+                           (charts.ADAPTIVE_LINESTYLES, ("dash", "longdashdot", "longdash"))):
+        if linestyle in styles:
+            return dashes[styles.index(linestyle)]
+    return "solid"
+
+
+HOVER_FIELDS = ("integrator", "family", "setting", "error", "cpu_time_s", "wall_time_s", "nfev", "steps", "status",
+                "message")
+RUN_HOVER = ("<b>%{customdata[0]}</b> (%{customdata[1]}), %{customdata[2]}<br>error %{customdata[3]}<br>"
+             "CPU time %{customdata[4]} s, wall time %{customdata[5]} s<br>nfev %{customdata[6]}, "
+             "steps %{customdata[7]}<br>status %{customdata[8]} %{customdata[9]}<extra></extra>")
+
+
+def _text(value: object) -> str:
+    if isinstance(value, (float, np.floating)):
+        return "–" if not math.isfinite(value) else f"{value:.3g}"
+    if value is None or value is pd.NA:
+        return "–"
+    return str(value)
+
+
+def _hover(rows: pd.DataFrame, error_column: str) -> list[list[str]]:
+    """customdata rows (``HOVER_FIELDS``) of results rows."""
+    data = []
+    for row in rows.to_dict("records"):
+        values = {**row, "setting": setting_label(row.get("kh"), row.get("tol")),
+                  "error": abs(row[error_column]) if row.get(error_column) is not None else math.nan}
+        data.append([_text(values.get(field, math.nan)) for field in HOVER_FIELDS])
+    return data
+
+
+def _legend_layout(figure: go.Figure, title: str) -> go.Figure:
+    figure.update_layout(title=title, template="plotly_white", height=520,
+                         legend={"groupclick": "toggleitem", "font": {"size": 11}},
+                         margin={"l": 70, "r": 20, "t": 60, "b": 60}, hovermode="closest")
+    return figure
+
+
+def _family_entry(family: str, colour: str) -> go.Scatter:
+    """A legend entry without data; a click on it shows or hides every trace of the family (``LEGEND_SCRIPT``)."""
+    return go.Scatter(x=[None], y=[None], mode="markers", name=f"all {family}", legendgroup=family,
+                      legendgrouptitle_text=family, marker={"color": colour, "symbol": "square", "size": 10},
+                      meta="family-toggle", hoverinfo="skip")
+
+
+def add_sweeps(figure: go.Figure, frame: pd.DataFrame, x_column: str, y_column: str, *, row: int = 1, col: int = 1,
+               legend: bool = True, x_spread: str | None = None, top: float | None = None) -> None:
+    """One trace per integrator through its ok runs (``charts.sweeps``) and, above the data at ``top``, one per
+    integrator for its diverged and failed runs."""
+    families_seen: set[str] = set()
+    for sweep in charts.sweeps(frame, x_column, y_column):
+        style = charts.integrator_style(sweep.integrator, sweep.family, sweep.adaptive)
+        if legend and sweep.family not in families_seen:
+            figure.add_trace(_family_entry(sweep.family, style["color"]), row=row, col=col)
+        families_seen.add(sweep.family)
+        points = sweep.points
+        error_x = None
+        if x_spread is not None and x_spread in points and points[x_spread].notna().any():
+            half = 0.5 * points[x_spread].to_numpy(float)
+            error_x = {"type": "data", "symmetric": False, "array": half,
+                       "arrayminus": np.minimum(half, 0.9 * points[x_column].to_numpy(float)), "thickness": 1,
+                       "width": 2}
+        figure.add_trace(go.Scatter(
+            x=points[x_column], y=points[y_column], mode="lines+markers", name=sweep.label,
+            legendgroup=sweep.family, showlegend=legend, error_x=error_x,
+            line={"color": style["color"], "dash": _dash(style["linestyle"]), "width": 1.5},
+            marker={"symbol": SYMBOLS.get(style["marker"], "circle"), "size": 7, "color": style["color"]},
+            customdata=_hover(points, y_column), hovertemplate=RUN_HOVER), row=row, col=col)
+        failed = pd.concat([sweep.diverged, sweep.failed])
+        known = failed[np.isfinite(failed[x_column].astype(float)) & (failed[x_column].astype(float) > 0)]
+        if top is not None and not known.empty:
+            symbols = ["triangle-up" if status == STATUS_DIVERGED else "x" for status in known["status"]]
+            figure.add_trace(go.Scatter(
+                x=known[x_column], y=np.full(len(known), top), mode="markers", name=f"{sweep.integrator} not ok",
+                legendgroup=sweep.family, showlegend=False,
+                marker={"symbol": symbols, "size": 9, "color": style["color"], "line": {"width": 1, "color": "black"}},
+                customdata=_hover(known, y_column), hovertemplate=RUN_HOVER), row=row, col=col)
+
+
+def _top(frame: pd.DataFrame, column: str) -> float | None:
+    """A y above every plotted value (×10 the largest), where not-ok runs are drawn."""
+    values = np.abs(frame.loc[frame["status"] == STATUS_OK, column].to_numpy(float))
+    values = values[np.isfinite(values) & (values > 0)]
+    return float(values.max() * 10.0) if values.size else 1.0
+
+
+def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame) -> go.Figure:
+    """``charts.work_precision`` for the page: verdict against time (with the Pareto envelope and the spread of
+    the repeats) and against right-hand-side evaluations."""
+    scene = scene_frame["scene"].iloc[0]
+    title, label = charts.VERDICT_LABELS[verdict]
+    time_cost, evaluations = charts.cost_axes(scene_frame)
+    figure = make_subplots(rows=1, cols=2, shared_yaxes=True, horizontal_spacing=0.04)
+    top = _top(scene_frame, verdict)
+    for col, cost in ((1, time_cost), (2, evaluations)):
+        add_sweeps(figure, scene_frame, cost, verdict, col=col, legend=col == 1,
+                   x_spread=charts.SPREAD_COLUMNS.get(cost), top=top)
+        figure.update_xaxes(type="log", title_text=charts.COST_LABELS[cost], row=1, col=col)
+    if not front.empty:
+        figure.add_trace(go.Scatter(x=front[time_cost], y=front["error"], mode="lines", line_shape="hv",
+                                    name="Pareto front", line={"color": "rgba(0,0,0,0.35)", "width": 4},
+                                    hoverinfo="skip"), row=1, col=1)
+    figure.update_yaxes(type="log", title_text=label, row=1, col=1)
+    return _legend_layout(figure, f"{scene}: {title} against cost (lower left is better)")
+
+
+def convergence(scene_frame: pd.DataFrame, orders: dict[str, float]) -> go.Figure:
+    """``charts.convergence`` for the page: reference error against k·h with a reference slope per order."""
+    scene = scene_frame["scene"].iloc[0]
+    fixed = scene_frame[scene_frame["tol"].isna()]
+    figure = make_subplots(rows=1, cols=1)
+    add_sweeps(figure, fixed, "kh", "reference_error", top=_top(fixed, "reference_error"))
+    for trace in figure.data:
+        fitted = orders.get(str(trace.name).split(" (")[0])
+        if fitted is not None and trace.meta != "family-toggle" and trace.showlegend is not False:
+            trace.name = f"{trace.name}, " + ("no fit" if not np.isfinite(fitted) else f"fitted order {fitted:.2f}")
+    points = {sweep.integrator: sweep.points for sweep in charts.sweeps(fixed, "kh", "reference_error")}
+    for order, kh, error in charts.reference_slopes(fixed, points):
+        figure.add_trace(go.Scatter(x=kh, y=error, mode="lines", name=f"slope {order}",
+                                    line={"color": "grey", "dash": "dot", "width": 1}, hoverinfo="name"))
+    figure.update_xaxes(type="log", title_text="k·h (step in units of 1/k = √(L/g))")
+    figure.update_yaxes(type="log", title_text="reference error, max |r − r_ref| / A")
+    return _legend_layout(figure, f"{scene}: convergence of the fixed-step integrators")
+
+
+def tolerance(scene_frame: pd.DataFrame) -> go.Figure:
+    """``charts.tolerance`` for the page: achieved reference error against requested tolerance."""
+    scene = scene_frame["scene"].iloc[0]
+    adaptive = scene_frame[scene_frame["tol"].notna()]
+    figure = make_subplots(rows=1, cols=1)
+    add_sweeps(figure, adaptive, "tol", "reference_error", top=_top(adaptive, "reference_error"))
+    tol = adaptive["tol"].to_numpy(float)
+    if tol.size:
+        figure.add_trace(go.Scatter(x=[tol.min(), tol.max()], y=[tol.min(), tol.max()], mode="lines",
+                                    name="error = tolerance", line={"color": "grey", "dash": "dot", "width": 1}))
+    figure.update_xaxes(type="log", autorange="reversed", title_text="requested tolerance (tighter to the right)")
+    figure.update_yaxes(type="log", title_text="reference error, max |r − r_ref| / A")
+    return _legend_layout(figure, f"{scene}: achieved error against requested tolerance")
+
+
+# --------------------------------------------------------------------------------------------------------------
+# study tables
+# --------------------------------------------------------------------------------------------------------------
+def long_time_energy(table: pd.DataFrame) -> go.Figure:
+    """``charts.long_time_energy`` for the page: the running maximum of |E − E₀|/E_swing against time."""
+    figure = go.Figure()
+    for integrator, family in charts._ordered_integrators(table):
+        rows = table[table["integrator"] == integrator]
+        style = charts.integrator_style(integrator, family)
+        error = np.abs(rows["energy_rel_error"].to_numpy(float))
+        finite = np.isfinite(error)
+        shown = np.maximum.accumulate(np.maximum(error[finite], charts.LOG_FLOOR)) if finite.any() else error[finite]
+        status = rows["status"].iloc[0]
+        name = f"{integrator} ({rows['setting'].iloc[0]})" + ("" if status == STATUS_OK else f": {status}")
+        figure.add_trace(go.Scatter(
+            x=rows["t_s"].to_numpy(float)[finite], y=shown, mode="lines", name=name, legendgroup=family,
+            legendgrouptitle_text=family, line={"color": style["color"], "dash": _dash(style["linestyle"])},
+            hovertemplate=f"<b>{integrator}</b> ({family}), {rows['setting'].iloc[0]}<br>t %{{x:.4g}} s<br>"
+                          f"max error so far %{{y:.3g}}<br>status {status}<extra></extra>"))
+    figure.update_xaxes(type="log", title_text="time t (s)")
+    figure.update_yaxes(type="log", title_text="largest |E(t) − E₀| / E_swing so far")
+    return _legend_layout(figure, "Long-time energy: running maximum of the relative energy error")
+
+
+def stability(table: pd.DataFrame) -> go.Figure:
+    """``charts.stability`` for the page: max energy error against k·h, one trace per integrator."""
+    figure = go.Figure()
+    for integrator, family in charts._ordered_integrators(table):
+        rows = table[table["integrator"] == integrator].sort_values("kh")
+        style = charts.integrator_style(integrator, family)
+        ok = rows[rows["status"] == STATUS_OK]
+        limit = float(rows["stability_limit_kh"].iloc[0])
+        figure.add_trace(go.Scatter(
+            x=ok["kh"], y=np.maximum(ok["energy_max_rel_error"].to_numpy(float), charts.LOG_FLOOR),
+            mode="lines+markers", name=f"{integrator} (limit {'none' if not np.isfinite(limit) else f'{limit:.3g}'})",
+            legendgroup=family, legendgrouptitle_text=family,
+            line={"color": style["color"], "dash": _dash(style["linestyle"])},
+            marker={"symbol": SYMBOLS.get(style["marker"], "circle"), "color": style["color"]},
+            hovertemplate=f"<b>{integrator}</b> ({family})<br>kh %{{x:.4g}}<br>max energy error %{{y:.3g}}"
+                          "<extra></extra>"))
+    figure.update_xaxes(title_text="k·h (step in units of 1/k = √(L/g))")
+    figure.update_yaxes(type="log", title_text="max |E − E₀| / E_swing")
+    return _legend_layout(figure, "Stability: energy error against k·h (diverged runs are not drawn)")
+
+
+def precession_latitude(table: pd.DataFrame) -> go.Figure:
+    """``charts.precession_latitude`` for the page: residual from −Ω_E sin φ against latitude, with the Airy
+    term."""
+    rows = table.sort_values("latitude_deg")
+    residual = (rows["rate_rad_s"] - rows["textbook_rate_rad_s"]) / SIDEREAL_EARTH_RATE_RAD_S
+    airy = (rows["airy_rate_rad_s"] - rows["textbook_rate_rad_s"]) / SIDEREAL_EARTH_RATE_RAD_S
+    figure = go.Figure()
+    figure.add_trace(go.Scatter(
+        x=rows["latitude_deg"], y=residual, mode="markers", name="measured − textbook (±1 standard error)",
+        marker={"color": charts.family_colour("taylor")},
+        error_y={"type": "data", "array": rows["rate_stderr_rad_s"] / SIDEREAL_EARTH_RATE_RAD_S},
+        hovertemplate="φ %{x:.3g}°<br>(rate + Ω_E sin φ) / Ω_E = %{y:.3g}<extra></extra>"))
+    figure.add_trace(go.Scatter(x=rows["latitude_deg"], y=airy, mode="lines", name="Airy: (3/8)θ₀² Ω_E sin φ",
+                                line={"color": "black", "dash": "dash"}))
+    figure.update_xaxes(title_text="latitude φ (°, north positive)")
+    figure.update_yaxes(title_text="(rate − (−Ω_E sin φ)) / Ω_E")
+    return _legend_layout(figure, "Precession against latitude: residual from the textbook rate")
+
+
+def adequacy(table: pd.DataFrame) -> go.Figure:
+    """``charts.adequacy`` for the page: what each simpler model gets wrong, measured and expected."""
+    rows = table.reset_index(drop=True)
+    labels = [f"{r.scene}: {r.simpler_model} vs {r.model}" for r in rows.itertuples()]
+    figure = make_subplots(rows=1, cols=2, shared_yaxes=True, horizontal_spacing=0.03)
+    for col, (measured, expected, label) in enumerate((
+            ("precession_rate_diff", "expected_rate_diff", "|rate(simpler) − rate(richer)| / (Ω_E |sin φ|)"),
+            ("trajectory_gap", "expected_trajectory_gap", "max |r(simpler) − r(richer)| / A")), start=1):
+        for column, name, marker in ((measured, "measured", {"color": "#4c72b0", "size": 9}),
+                                     (expected, "leading-order expectation",
+                                      {"color": "rgba(0,0,0,0)", "size": 13, "line": {"color": "black", "width": 1.5}})):
+            if column not in rows:
+                continue
+            values = np.abs(rows[column].to_numpy(float))
+            known = np.isfinite(values) & (values > 0)
+            figure.add_trace(go.Scatter(
+                x=values[known], y=np.array(labels)[known], mode="markers", name=name, legendgroup=name,
+                showlegend=col == 1, marker=marker, hovertemplate=f"%{{y}}<br>{name}: %{{x:.3g}}<extra></extra>"),
+                row=1, col=col)
+        figure.update_xaxes(type="log", title_text=label, row=1, col=col)
+    figure.update_yaxes(autorange="reversed")
+    figure = _legend_layout(figure, "Model adequacy: what each simpler model gets wrong, per scene")
+    figure.update_layout(height=max(360, 28 * len(rows) + 160))
+    return figure
+
+
+# --------------------------------------------------------------------------------------------------------------
+# the page
+# --------------------------------------------------------------------------------------------------------------
+def drawn_points(figure: go.Figure) -> int:
+    """How many markers plotly draws for ``figure``: points of marker traces with finite coordinates (and
+    positive ones on log axes). The browser test compares this with the markers found on the page."""
+    layout = figure.layout
+    count = 0
+    for trace in figure.data:
+        if "markers" not in (trace.mode or "") or trace.x is None or trace.y is None:
+            continue
+        x_axis = layout[("xaxis" + str(trace.xaxis or "x")[1:])]
+        y_axis = layout[("yaxis" + str(trace.yaxis or "y")[1:])]
+        x = pd.to_numeric(pd.Series(list(trace.x)), errors="coerce").to_numpy(float) \
+            if x_axis.type != "category" else np.zeros(len(trace.x))
+        y = pd.to_numeric(pd.Series(list(trace.y)), errors="coerce").to_numpy(float)
+        if len(y) and np.all(np.isnan(y)) and len(trace.y) and isinstance(list(trace.y)[0], str):
+            y = np.zeros(len(trace.y))  # categorical y (the adequacy chart's labels)
+        keep = np.isfinite(x) & np.isfinite(y)
+        if x_axis.type == "log":
+            keep &= x > 0
+        if y_axis.type == "log":
+            keep &= y > 0
+        count += int(keep.sum())
+    return count
+
+
+LEGEND_SCRIPT = """
+function foucaultLegendClick(chart, event) {
+  var trace = event.data[event.curveNumber];
+  if (trace.meta !== 'family-toggle') { return true; }
+  var group = trace.legendgroup, members = [], visible = [];
+  event.data.forEach(function (other, index) {
+    if (other.legendgroup === group && other.meta !== 'family-toggle') { members.push(index); }
+  });
+  var hide = members.some(function (index) { return event.data[index].visible !== 'legendonly'; });
+  members.forEach(function () { visible.push(hide ? 'legendonly' : true); });
+  Plotly.restyle(chart, {visible: visible}, members);
+  return false;
+}
+"""
+"""Legend clicks: an "all <family>" entry hides (or shows) every trace of its family; other entries keep
+plotly's default (hide that integrator; double click: show only it)."""
