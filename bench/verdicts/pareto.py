@@ -133,12 +133,13 @@ def best_of_family(frame: pd.DataFrame, metric: str = "reference_error") -> pd.D
 
 def cheapest_meeting(frame: pd.DataFrame, metric: str, target: float) -> pd.DataFrame:
     """Every usable run with |metric| ≤ ``target``, cheapest first (ties: smaller error), repeated runs of one
-    integrator and setting reduced to their cheapest. Columns as ``pareto_front``."""
+    integrator and setting reduced to their cheapest. Columns as ``pareto_front``; the index is the runs'
+    index in ``frame``."""
     cost = cost_column(frame)
     runs = usable_runs(frame, metric, cost)
     met = runs[runs["error"] <= target].sort_values(["cost", "error"], kind="stable")
     table = _identity(met, metric, cost)
-    return table.drop_duplicates(["scene", "integrator", "setting"]).reset_index(drop=True)
+    return table.drop_duplicates(["scene", "integrator", "setting"])
 
 
 def matched_accuracy(frame: pd.DataFrame, metric: str = "reference_error",
