@@ -12,7 +12,7 @@ Conventions shared by every chart:
 * log axes wherever values span decades; axis labels carry units;
 * work-precision charts: cost = CPU time where the results have it, else wall time
   (``bench.verdicts.pareto.cost_column``), the spread of the timed repeats as horizontal bars, the Pareto
-  envelope as a grey staircase, each line's first and last setting written beside it.
+  envelope as a grey staircase, each line's finest setting written at its end.
 
 ``reports.interactive`` draws the same charts for the HTML page from the same ``sweeps``; these are the static
 PNG/SVG files for papers. Figures are built with ``matplotlib.figure.Figure`` (no pyplot state), so importing this module never changes
@@ -205,7 +205,7 @@ def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str, *
     """One line per integrator through its ok runs in sweep order (largest k·h or tolerance first); diverged and
     failed runs and ok runs without a plottable value as edge markers. ``x_spread`` names a column drawn as a
     horizontal bar of that total length centred on each point (the spread of the timed repeats); ``labels``
-    writes the setting next to the first and last point of each line. Returns one legend handle per integrator,
+    writes the setting next to the last (finest) point of each line. Returns one legend handle per integrator,
     labelled with its counts of diverged and failed runs."""
     handles = []
     left_slots = {"top": 0, "bottom": 0}
@@ -219,10 +219,9 @@ def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str, *
             half = 0.5 * sweep.points[x_spread].to_numpy(dtype=float)
             axes.errorbar(x, y, xerr=np.vstack([np.minimum(half, 0.9 * x), half]), fmt="none",
                           ecolor=style["color"], elinewidth=0.8, capsize=2, alpha=0.7)
-        if labels and len(x):
-            for index in sorted({0, len(x) - 1}):
-                axes.annotate(setting_text(sweep.points.iloc[index]), (x[index], y[index]), fontsize=6.5,
-                              color=style["color"], xytext=(4, 3), textcoords="offset points")
+        if labels and len(x):  # the finest setting, at the end of the line
+            axes.annotate(setting_text(sweep.points.iloc[-1]), (x[-1], y[-1]), fontsize=6.5, color=style["color"],
+                          xytext=(4, 3), textcoords="offset points")
         no_value = sweep.no_value[x_column].to_numpy(dtype=float)
         left_slots["bottom"] += mark_on_edge(axes, no_value, style["color"], NO_VALUE_MARKER, "bottom",
                                              left_slots["bottom"])
@@ -327,7 +326,6 @@ def convergence(scene_frame: pd.DataFrame, orders: dict[str, float], stem: Path)
     for order, kh, error in reference_slopes(fixed, points):
         (line,) = axes.plot(kh, error, color="grey", linestyle=(0, (2, 2)), linewidth=1, label=f"slope {order}")
         handles.append(line)
-        axes.annotate(f"slope {order}", (kh[-1], error[-1]), fontsize=8, color="grey")
     set_log_scales(axes)
     axes.set_xlabel("k·h (step in units of 1/k = √(L/g))")
     axes.set_ylabel("reference error, max |r − r_ref| / A")

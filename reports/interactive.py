@@ -265,6 +265,46 @@ def adequacy(table: pd.DataFrame) -> go.Figure:
 
 
 # --------------------------------------------------------------------------------------------------------------
+# line charts drawn with matplotlib elsewhere (the seed section)
+# --------------------------------------------------------------------------------------------------------------
+DASHES = {"-": "solid", "--": "dash", ":": "dot", "-.": "dashdot"}
+"""matplotlib line style → plotly dash."""
+
+
+def from_matplotlib(figure: "matplotlib.figure.Figure") -> go.Figure:
+    """A plotly figure with the data lines of a matplotlib figure (``Line2D`` in data coordinates: colour,
+    style, width, label, panel titles, axis labels and scales); hovering shows the curve and its x, y. For the
+    line charts of ``reports.seed``, whose data are curves, not runs."""
+    panels = [axes for axes in figure.axes if axes.get_subplotspec() is not None]
+    geometry = panels[0].get_subplotspec().get_geometry()[:2] if panels else (1, 1)
+    plot = make_subplots(rows=geometry[0], cols=geometry[1], horizontal_spacing=0.08,
+                         subplot_titles=[axes.get_title() for axes in panels])
+    for axes in panels:
+        spec = axes.get_subplotspec()
+        row, col = spec.rowspan.start + 1, spec.colspan.start + 1
+        for line in axes.get_lines():
+            if line.get_transform() != axes.transData:
+                continue
+            label = str(line.get_label())
+            shown = not label.startswith("_")
+            linestyle = line.get_linestyle()
+            mode = "markers" if linestyle in ("None", "", " ") else "lines"
+            plot.add_trace(go.Scatter(
+                x=np.asarray(line.get_xdata(), dtype=float), y=np.asarray(line.get_ydata(), dtype=float), mode=mode,
+                name=label if shown else axes.get_title(), showlegend=shown,
+                line={"color": line.get_color(), "dash": DASHES.get(linestyle, "solid"),
+                      "width": float(line.get_linewidth())},
+                hovertemplate=f"{label if shown else axes.get_title()}<br>x %{{x:.4g}}<br>y %{{y:.4g}}<extra></extra>"),
+                row=row, col=col)
+        plot.update_xaxes(title_text=axes.get_xlabel(), type="log" if axes.get_xscale() == "log" else "linear",
+                          row=row, col=col)
+        plot.update_yaxes(title_text=axes.get_ylabel(), type="log" if axes.get_yscale() == "log" else "linear",
+                          row=row, col=col)
+    title = figure.get_suptitle()
+    return _legend_layout(plot, title)
+
+
+# --------------------------------------------------------------------------------------------------------------
 # the page
 # --------------------------------------------------------------------------------------------------------------
 def drawn_points(figure: go.Figure) -> int:

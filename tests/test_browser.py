@@ -75,8 +75,9 @@ def report_dom(tmp_path_factory) -> tuple[Path, str]:
         "study_precession_latitude": precession_vs_latitude(PrecessionLatitudeConfig(
             duration_s=300.0, n_latitudes=5, amplitude_m=1.0), progress=False),
     }
-    build_report(ReportInputs(runs=results_fixture(), studies=studies, adequacy=adequacy_fixture(),
-                              include_seed=False), folder)
+    runs = results_fixture()  # one scene: every kind of chart, half the figures
+    build_report(ReportInputs(runs=runs[runs["scene"] == "lab"], studies=studies, adequacy=adequacy_fixture(),
+                              include_seed=True), folder)
     profile = tmp_path_factory.mktemp("browser-profile")
     done = subprocess.run([BROWSER, *BROWSER_FLAGS, f"--user-data-dir={profile}", (folder / "index.html").as_uri()],
                           capture_output=True, text=True, timeout=50, stdin=subprocess.DEVNULL)
@@ -89,12 +90,13 @@ def test_every_chart_draws_its_points_lines_and_legend(report_dom: tuple[Path, s
     counter = ChartCounter()
     counter.feed(dom)
     html = (folder / "index.html").read_text(encoding="utf-8")
-    assert len(counter.charts) == html.count("class='chart'") >= 15
+    assert len(counter.charts) == html.count("class='chart'") == html.count("<figure>")  # every chart interactive
     for chart in counter.charts:
         assert chart["points"] == chart["expected"], chart
         assert chart["points"] + chart["lines"] > 0, chart
         assert chart["legend"] > 0, chart
-    assert sum(chart["expected"] > 0 for chart in counter.charts) >= len(counter.charts) - 1  # long-time: lines
+    # curves without markers: the long-time energy chart and the seed section's four figures
+    assert sum(chart["expected"] == 0 for chart in counter.charts) == 5
 
 
 def test_points_carry_their_run_for_the_hover(report_dom: tuple[Path, str]) -> None:
