@@ -177,8 +177,16 @@ def _decisions(builder: _Builder, runs: pd.DataFrame, targets: tuple[float, ...]
         "every integrator and setting, cheapest first (bench.verdicts.pareto): read down a scene's rows to "
         "see which integrator is the cheapest way to each accuracy. Below, each family's most accurate run and "
         "how many points of the front it holds."))
-    builder.table(tables.fronts(runs), "pareto_fronts", "Pareto-efficient runs per scene and error metric")
-    builder.table(tables.families(runs), "best_of_family", "Best run of each family per scene and error metric")
+    fronts, families = tables.fronts(runs), tables.families(runs)
+    for frame, stem, title in ((fronts, "pareto_fronts", "Pareto-efficient runs per scene (reference error)"),
+                               (families, "best_of_family", "Best run of each family per scene (reference error)")):
+        builder.table(frame[frame["metric"] == "reference_error"] if not frame.empty else frame, stem, title)
+        write_table_files(frame, builder.folder, f"{TABLES}/{stem}_all_metrics", f"{title[:title.index(' (')]}, "
+                          "every error metric", tables.INTEGER_COLUMNS)
+    builder.add(Paragraph(
+        f"The same for every error metric (energy error and drift, precession-rate error, analytic gap): "
+        f"`{TABLES}/pareto_fronts_all_metrics.csv` and `{TABLES}/best_of_family_all_metrics.csv` (also .md, .tex, "
+        ".html)."))
 
 
 def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:

@@ -69,6 +69,8 @@ def _legend_layout(figure: go.Figure, title: str) -> go.Figure:
     figure.update_layout(title=title, template="plotly_white", height=520,
                          legend={"groupclick": "toggleitem", "font": {"size": 11}},
                          margin={"l": 70, "r": 20, "t": 60, "b": 60}, hovermode="closest")
+    figure.update_xaxes(exponentformat="power")
+    figure.update_yaxes(exponentformat="power")
     return figure
 
 
@@ -136,7 +138,8 @@ def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame)
         figure.add_trace(go.Scatter(x=front[time_cost], y=front["error"], mode="lines", line_shape="hv",
                                     name="Pareto front", line={"color": "rgba(0,0,0,0.35)", "width": 4},
                                     hoverinfo="skip"), row=1, col=1)
-    figure.update_yaxes(type="log", title_text=label, row=1, col=1)
+    figure.update_yaxes(type="log")
+    figure.update_yaxes(title_text=label, row=1, col=1)
     return _legend_layout(figure, f"{scene}: {title} against cost (lower left is better)")
 
 

@@ -8,8 +8,8 @@ report, the ``advise`` command and the tests share one definition:
 * ``pareto_front``: per scene, the runs no other run beats on both cost and error (across every integrator
   and setting), cheapest first: the lower-left envelope of a work-precision chart (the efficient frontier of
   Pareto optimality; as in DiffEqDevTools' work-precision sets, a run is a point, not a method);
-* ``best_of_family``: per scene and integrator family, the family's most accurate run and its cheapest run
-  on the overall front;
+* ``best_of_family``: per scene and integrator family, the family's most accurate run and how many of the
+  scene's front runs are the family's;
 * ``cheapest_meeting``: every run that meets a target, cheapest first, one per integrator and setting;
 * ``matched_accuracy``: per scene and target, the cheapest run meeting it, the runner-up (the cheapest run of
   another integrator) and their cost ratio.
