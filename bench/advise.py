@@ -215,8 +215,10 @@ def model_advice(adequacy: pd.DataFrame, scene: Scene, target: Target) -> dict[s
             enough = row.simpler_model
     leaves_out = [f"the {row.model} model changes the {what} by {abs(float(getattr(row, quantity))):.2g} {unit}"
                   for row in richer.itertuples()]
-    text = f"{enough} is enough at {target.value:g}: " + "; ".join(leaves_out + details) if (leaves_out or details) \
-        else f"{scene.model} (no simpler or richer model to compare with)"
+    if not (leaves_out or details):
+        return {"needed": enough, "text": f"{scene.model} (no simpler or richer model to compare with)"}
+    verdict = "is needed" if enough == scene.model and details else "is enough"
+    text = f"{enough} {verdict} at {target.value:g}: " + "; ".join(leaves_out + details)
     return {"needed": enough, "text": text}
 
 
