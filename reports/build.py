@@ -191,7 +191,10 @@ def _decisions(builder: _Builder, runs: pd.DataFrame, targets: tuple[float, ...]
 
 def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
     builder.add(Heading("Work-precision"), Paragraph(
-        "Each verdict against the two costs, time and right-hand-side evaluations, one line per integrator. "
+        "Each verdict against two costs, one line per integrator: time (median of the timed repeats, compile "
+        "time excluded; the bar across a point spans max − min of the repeats), and the accepted steps, counted "
+        "for every family (what one step costs differs: s right-hand-side evaluations for a Runge-Kutta method, "
+        "one corrector solve for a multistep method, one order-p Taylor expansion for heyoka). "
         "The energy error is the largest deviation over the run; the energy drift its least-squares trend, "
         "which tells a drifting integrator from one whose error oscillates within a bound. "
         "The precession-rate error is the integrator's own: measured rate against the reference solution's rate "
@@ -205,7 +208,7 @@ def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
                 continue
             front = pareto_front(scene_runs, verdict)
             builder.figure(f"work_precision_{file_stem(scene)}_{verdict}",
-                           f"{scene}: {title} ({label}) against time and right-hand-side evaluations; grey "
+                           f"{scene}: {title} ({label}) against time and accepted steps; grey "
                            f"staircase: Pareto front ({len(front)} runs).",
                            lambda stem: charts.work_precision(scene_runs, verdict, front, stem),
                            lambda: interactive.work_precision(scene_runs, verdict, front))

@@ -254,21 +254,25 @@ VERDICT_LABELS: dict[str, tuple[str, str]] = {
 """Verdict column → (short title, axis label) for the work-precision charts (absolute values are plotted)."""
 
 COST_LABELS: dict[str, str] = {
-    "cpu_time_s": "CPU time per run (s), median of repeats",
-    "wall_time_s": "wall time per run (s), median of repeats",
-    "nfev": "right-hand-side evaluations (heyoka: Taylor steps)",
+    "cpu_time_s": "CPU time per run (s): median of the timed repeats, bar = max − min",
+    "wall_time_s": "wall time per run (s): median of the timed repeats, bar = max − min",
+    "steps": "accepted steps (one step = s RHS evaluations for Runge-Kutta,\n"
+             "one corrector solve for multistep, one order-p Taylor expansion for heyoka)",
 }
-SPREAD_COLUMNS: dict[str, str] = {"cpu_time_s": "cpu_time_spread_s", "wall_time_s": "wall_time_spread_s"}
-"""Cost column → the column holding the spread (max − min) of its timed repeats."""
+"""Cost column → axis label of the work-precision charts. Steps are counted for every family, so no method is
+drawn on an axis whose unit does not apply to it (a Taylor step is not a right-hand-side evaluation); what a
+step costs differs by family, which the time panel shows."""
+COST_SPREADS: dict[str, str] = {"cpu_time_s": "cpu_time_spread_s", "wall_time_s": "wall_time_spread_s"}
+"""Cost column → the column holding the spread (max − min) of its timed repeats (drawn as error bars)."""
 
 
 def cost_axes(frame: pd.DataFrame) -> tuple[str, str]:
-    """The two cost axes of a work-precision chart: time (``pareto.cost_column``) and evaluations."""
-    return cost_column(frame), "nfev"
+    """The two cost axes of a work-precision chart: time (``pareto.cost_column``) and accepted steps."""
+    return cost_column(frame), "steps"
 
 
 def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame, stem: Path) -> Path:
-    """Verdict against time and against right-hand-side evaluations for one scene, one line per integrator,
+    """Verdict against time and against accepted steps for one scene, one line per integrator,
     fixed-step and tolerance sweeps on the same axes, the time's spread as bars, the Pareto envelope
     (``front``: ``bench.verdicts.pareto.pareto_front`` rows of this scene and verdict, may be empty) on the
     time panel."""
@@ -279,7 +283,7 @@ def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame,
     handles = []
     time_cost = cost_axes(scene_frame)[0]
     for axes, cost in zip(axes_pair, cost_axes(scene_frame)):
-        handles = plot_sweeps(axes, scene_frame, cost, verdict, x_spread=SPREAD_COLUMNS.get(cost),
+        handles = plot_sweeps(axes, scene_frame, cost, verdict, x_spread=COST_SPREADS.get(cost),
                               labels=cost == time_cost)
         set_log_scales(axes)
         axes.set_xlabel(COST_LABELS[cost])

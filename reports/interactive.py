@@ -124,15 +124,15 @@ def _top(frame: pd.DataFrame, column: str) -> float | None:
 
 def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame) -> go.Figure:
     """``charts.work_precision`` for the page: verdict against time (with the Pareto envelope and the spread of
-    the repeats) and against right-hand-side evaluations."""
+    the repeats) and against accepted steps."""
     scene = scene_frame["scene"].iloc[0]
     title, label = charts.VERDICT_LABELS[verdict]
-    time_cost, evaluations = charts.cost_axes(scene_frame)
+    time_cost, steps = charts.cost_axes(scene_frame)
     figure = make_subplots(rows=1, cols=2, shared_yaxes=True, horizontal_spacing=0.04)
     top = _top(scene_frame, verdict)
-    for col, cost in ((1, time_cost), (2, evaluations)):
+    for col, cost in ((1, time_cost), (2, steps)):
         add_sweeps(figure, scene_frame, cost, verdict, col=col, legend=col == 1,
-                   x_spread=charts.SPREAD_COLUMNS.get(cost), top=top)
+                   x_spread=charts.COST_SPREADS.get(cost), top=top)
         figure.update_xaxes(type="log", title_text=charts.COST_LABELS[cost], row=1, col=col)
     if not front.empty:
         figure.add_trace(go.Scatter(x=front[time_cost], y=front["error"], mode="lines", line_shape="hv",
