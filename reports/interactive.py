@@ -4,7 +4,8 @@ Each function returns a ``plotly.graph_objects.Figure`` (plotly: https://plotly.
 embeds its JSON and plotly.js is written beside index.html (``PLOTLY_JS``), so the page opens offline. In every
 chart of results rows, hovering a point shows the run (integrator, family, setting, error, CPU and wall time,
 right-hand-side evaluations, steps, status); clicking a legend entry hides that integrator, clicking the
-"all <family>" entry hides or shows the whole family (``LEGEND_SCRIPT``); axes are logarithmic. Colours,
+"all <family>" entry hides or shows the whole family (``LEGEND_SCRIPT``); axes are logarithmic. The charts of
+curves (study tables, the seed section) are converted from their matplotlib figures (``from_matplotlib``). Colours,
 markers and dashes follow ``reports.charts`` (colour = family, marker = integrator, solid = fixed step,
 dashed = tolerance sweep). Diverged and failed runs are drawn above the data (▲, ✕) at their cost.
 """
@@ -12,22 +13,26 @@ dashed = tolerance sweep). Diverged and failed runs are drawn above the data (�
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pandas as pd
 import plotly.graph_objects as go
+from matplotlib.colors import to_hex
+from matplotlib.figure import Figure as MplFigure
+from matplotlib.ticker import FixedFormatter
 from plotly.subplots import make_subplots
 
 from foucault_bench.bench.run.store import setting_label
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_OK
-from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
 from foucault_bench.reports import charts
 
 PLOTLY_JS = "plotly.min.js"
 """File name of plotly.js in the report folder."""
 
 SYMBOLS = {"o": "circle", "s": "square", "D": "diamond", "v": "triangle-down", "P": "cross", "*": "star",
-           "h": "hexagon", "<": "triangle-left", ">": "triangle-right", "p": "pentagon"}
+           "h": "hexagon", "<": "triangle-left", ">": "triangle-right", "p": "pentagon", "^": "triangle-up",
+           "X": "x"}
 """matplotlib marker (``charts.INTEGRATOR_MARKERS``) → plotly symbol."""
 
 
@@ -178,133 +183,58 @@ def tolerance(scene_frame: pd.DataFrame) -> go.Figure:
 
 
 # --------------------------------------------------------------------------------------------------------------
-# study tables
-# --------------------------------------------------------------------------------------------------------------
-def long_time_energy(table: pd.DataFrame) -> go.Figure:
-    """``charts.long_time_energy`` for the page: the running maximum of |E − E₀|/E_swing against time."""
-    figure = go.Figure()
-    for integrator, family in charts._ordered_integrators(table):
-        rows = table[table["integrator"] == integrator]
-        style = charts.integrator_style(integrator, family)
-        error = np.abs(rows["energy_rel_error"].to_numpy(float))
-        finite = np.isfinite(error)
-        shown = np.maximum.accumulate(np.maximum(error[finite], charts.LOG_FLOOR)) if finite.any() else error[finite]
-        status = rows["status"].iloc[0]
-        name = f"{integrator} ({rows['setting'].iloc[0]})" + ("" if status == STATUS_OK else f": {status}")
-        figure.add_trace(go.Scatter(
-            x=rows["t_s"].to_numpy(float)[finite], y=shown, mode="lines", name=name, legendgroup=family,
-            legendgrouptitle_text=family, line={"color": style["color"], "dash": _dash(style["linestyle"])},
-            hovertemplate=f"<b>{integrator}</b> ({family}), {rows['setting'].iloc[0]}<br>t %{{x:.4g}} s<br>"
-                          f"max error so far %{{y:.3g}}<br>status {status}<extra></extra>"))
-    figure.update_xaxes(type="log", title_text="time t (s)")
-    figure.update_yaxes(type="log", title_text="largest |E(t) − E₀| / E_swing so far")
-    return _legend_layout(figure, "Long-time energy: running maximum of the relative energy error")
-
-
-def stability(table: pd.DataFrame) -> go.Figure:
-    """``charts.stability`` for the page: max energy error against k·h, one trace per integrator."""
-    figure = go.Figure()
-    for integrator, family in charts._ordered_integrators(table):
-        rows = table[table["integrator"] == integrator].sort_values("kh")
-        style = charts.integrator_style(integrator, family)
-        ok = rows[rows["status"] == STATUS_OK]
-        limit = float(rows["stability_limit_kh"].iloc[0])
-        figure.add_trace(go.Scatter(
-            x=ok["kh"], y=np.maximum(ok["energy_max_rel_error"].to_numpy(float), charts.LOG_FLOOR),
-            mode="lines+markers", name=f"{integrator} (limit {'none' if not np.isfinite(limit) else f'{limit:.3g}'})",
-            legendgroup=family, legendgrouptitle_text=family,
-            line={"color": style["color"], "dash": _dash(style["linestyle"])},
-            marker={"symbol": SYMBOLS.get(style["marker"], "circle"), "color": style["color"]},
-            hovertemplate=f"<b>{integrator}</b> ({family})<br>kh %{{x:.4g}}<br>max energy error %{{y:.3g}}"
-                          "<extra></extra>"))
-    figure.update_xaxes(title_text="k·h (step in units of 1/k = √(L/g))")
-    figure.update_yaxes(type="log", title_text="max |E − E₀| / E_swing")
-    return _legend_layout(figure, "Stability: energy error against k·h (diverged runs are not drawn)")
-
-
-def precession_latitude(table: pd.DataFrame) -> go.Figure:
-    """``charts.precession_latitude`` for the page: residual from −Ω_E sin φ against latitude, with the Airy
-    term."""
-    rows = table.sort_values("latitude_deg")
-    residual = (rows["rate_rad_s"] - rows["textbook_rate_rad_s"]) / SIDEREAL_EARTH_RATE_RAD_S
-    airy = (rows["airy_rate_rad_s"] - rows["textbook_rate_rad_s"]) / SIDEREAL_EARTH_RATE_RAD_S
-    figure = go.Figure()
-    figure.add_trace(go.Scatter(
-        x=rows["latitude_deg"], y=residual, mode="markers", name="measured − textbook (±1 standard error)",
-        marker={"color": charts.family_colour("taylor")},
-        error_y={"type": "data", "array": rows["rate_stderr_rad_s"] / SIDEREAL_EARTH_RATE_RAD_S},
-        hovertemplate="φ %{x:.3g}°<br>(rate + Ω_E sin φ) / Ω_E = %{y:.3g}<extra></extra>"))
-    figure.add_trace(go.Scatter(x=rows["latitude_deg"], y=airy, mode="lines", name="Airy: (3/8)θ₀² Ω_E sin φ",
-                                line={"color": "black", "dash": "dash"}))
-    figure.update_xaxes(title_text="latitude φ (°, north positive)")
-    figure.update_yaxes(title_text="(rate − (−Ω_E sin φ)) / Ω_E")
-    return _legend_layout(figure, "Precession against latitude: residual from the textbook rate")
-
-
-def adequacy(table: pd.DataFrame) -> go.Figure:
-    """``charts.adequacy`` for the page: what each simpler model gets wrong, measured and expected."""
-    rows = table.reset_index(drop=True)
-    labels = [f"{r.scene}: {r.simpler_model} vs {r.model}" for r in rows.itertuples()]
-    figure = make_subplots(rows=1, cols=2, shared_yaxes=True, horizontal_spacing=0.03)
-    for col, (measured, expected, label) in enumerate((
-            ("precession_rate_diff", "expected_rate_diff", "|rate(simpler) − rate(richer)| / (Ω_E |sin φ|)"),
-            ("trajectory_gap", "expected_trajectory_gap", "max |r(simpler) − r(richer)| / A")), start=1):
-        for column, name, marker in ((measured, "measured", {"color": "#4c72b0", "size": 9}),
-                                     (expected, "leading-order expectation",
-                                      {"color": "rgba(0,0,0,0)", "size": 13, "line": {"color": "black", "width": 1.5}})):
-            if column not in rows:
-                continue
-            values = np.abs(rows[column].to_numpy(float))
-            known = np.isfinite(values) & (values > 0)
-            figure.add_trace(go.Scatter(
-                x=values[known], y=np.array(labels)[known], mode="markers", name=name, legendgroup=name,
-                showlegend=col == 1, marker=marker, hovertemplate=f"%{{y}}<br>{name}: %{{x:.3g}}<extra></extra>"),
-                row=1, col=col)
-        figure.update_xaxes(type="log", title_text=label, row=1, col=col)
-    figure.update_yaxes(autorange="reversed")
-    figure = _legend_layout(figure, "Model adequacy: what each simpler model gets wrong, per scene")
-    figure.update_layout(height=max(360, 28 * len(rows) + 160))
-    return figure
-
-
-# --------------------------------------------------------------------------------------------------------------
 # line charts drawn with matplotlib elsewhere (the seed section)
 # --------------------------------------------------------------------------------------------------------------
 DASHES = {"-": "solid", "--": "dash", ":": "dot", "-.": "dashdot"}
 """matplotlib line style → plotly dash."""
 
 
-def from_matplotlib(figure: "matplotlib.figure.Figure") -> go.Figure:
+def _ticks(axis) -> dict[str, Any]:
+    """Tick labels a chart set by hand (``set_yticks(positions, labels)``), for plotly."""
+    if isinstance(axis.get_major_formatter(), FixedFormatter):
+        return {"tickvals": list(axis.get_majorticklocs()), "ticktext": [t.get_text() for t in axis.get_ticklabels()]}
+    return {}
+
+
+def from_matplotlib(figure: MplFigure) -> go.Figure:
     """A plotly figure with the data lines of a matplotlib figure (``Line2D`` in data coordinates: colour,
-    style, width, label, panel titles, axis labels and scales); hovering shows the curve and its x, y. For the
-    line charts of ``reports.seed``, whose data are curves, not runs."""
-    panels = [axes for axes in figure.axes if axes.get_subplotspec() is not None]
+    style, markers, width, label; panel titles, axis labels, scales and hand-set tick labels). Used for the
+    charts of curves (study tables, the seed section), where hovering shows the curve and its x, y. A line
+    without a label is named after its panel and left out of the legend when a labelled line of the same colour
+    in the panel stands for it; lines drawn in axes coordinates (edge markers, reference lines) are left out."""
+    panels = [axes for axes in figure.axes if axes.get_subplotspec() is not None and axes.get_visible()]
     geometry = panels[0].get_subplotspec().get_geometry()[:2] if panels else (1, 1)
     plot = make_subplots(rows=geometry[0], cols=geometry[1], horizontal_spacing=0.08,
                          subplot_titles=[axes.get_title() for axes in panels])
+    legend_names: set[str] = set()
     for axes in panels:
         spec = axes.get_subplotspec()
         row, col = spec.rowspan.start + 1, spec.colspan.start + 1
-        for line in axes.get_lines():
-            if line.get_transform() != axes.transData:
-                continue
+        lines = [line for line in axes.get_lines() if line.get_transform() == axes.transData]
+        labelled_colours = {to_hex(line.get_color()) for line in lines if not str(line.get_label()).startswith("_")}
+        for line in lines:
+            colour = to_hex(line.get_color())
             label = str(line.get_label())
-            shown = not label.startswith("_")
+            labelled = not label.startswith("_")
             linestyle = line.get_linestyle()
-            mode = "markers" if linestyle in ("None", "", " ") else "lines"
+            name = label if labelled else axes.get_title() + (" (dashed)" if linestyle == "--" else "")
+            shown = (labelled or colour not in labelled_colours) and name not in legend_names
+            legend_names.add(name)
+            mode = "lines" if line.get_marker() in (None, "None", "", " ") else "markers" \
+                if linestyle in ("None", "", " ") else "lines+markers"
             plot.add_trace(go.Scatter(
                 x=np.asarray(line.get_xdata(), dtype=float), y=np.asarray(line.get_ydata(), dtype=float), mode=mode,
-                name=label if shown else axes.get_title(), showlegend=shown,
-                line={"color": line.get_color(), "dash": DASHES.get(linestyle, "solid"),
-                      "width": float(line.get_linewidth())},
-                hovertemplate=f"{label if shown else axes.get_title()}<br>x %{{x:.4g}}<br>y %{{y:.4g}}<extra></extra>"),
-                row=row, col=col)
+                name=name, legendgroup=name, showlegend=shown,
+                line={"color": colour, "dash": DASHES.get(linestyle, "solid"), "width": float(line.get_linewidth())},
+                marker={"color": colour, "symbol": SYMBOLS.get(line.get_marker(), "circle"),
+                        "size": max(4.0, float(line.get_markersize()))},
+                hovertemplate=f"{name}<br>x %{{x:.4g}}<br>y %{{y:.4g}}<extra></extra>"), row=row, col=col)
         plot.update_xaxes(title_text=axes.get_xlabel(), type="log" if axes.get_xscale() == "log" else "linear",
-                          row=row, col=col)
+                          row=row, col=col, **_ticks(axes.xaxis))
         plot.update_yaxes(title_text=axes.get_ylabel(), type="log" if axes.get_yscale() == "log" else "linear",
-                          row=row, col=col)
-    title = figure.get_suptitle()
-    return _legend_layout(plot, title)
+                          autorange="reversed" if axes.yaxis_inverted() else True, row=row, col=col,
+                          **_ticks(axes.yaxis))
+    return _legend_layout(plot, figure.get_suptitle())
 
 
 # --------------------------------------------------------------------------------------------------------------

@@ -152,11 +152,11 @@ def test_linear_turning_points_lie_on_the_textbook_azimuth(name: str) -> None:
     error = float(np.max(np.abs(solution.y - linear_exact(SCENE, T_OUT)) / state_scale(SCENE)))
     bound = TURNING_POINT_MARGIN * error + ROUND_OFF_FLOOR
     interval_s = float(T_OUT[1] - T_OUT[0])
-    time_bound = bound + turning_time_error_bound(SCENE, interval_s) * big_omega
+    time_bound = bound + turning_time_error_bound(SCENE, interval_s, float(T_OUT[-1])) * big_omega
     assert np.max(np.abs(found[:, 0] - n * math.pi / big_omega)) * big_omega <= time_bound
     azimuth = np.arctan2(found[:, 2], found[:, 1])
     offset = (azimuth - textbook_turning_azimuth(SCENE, found[:, 0]) + math.pi / 2) % math.pi - math.pi / 2
-    assert np.max(np.abs(offset)) <= bound + azimuth_error_bound(SCENE, interval_s)
+    assert np.max(np.abs(offset)) <= bound + azimuth_error_bound(SCENE, interval_s, float(T_OUT[-1]))
 
 
 @pytest.mark.parametrize("name", ADAPTIVE)
