@@ -24,7 +24,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import pandas as pd
 from matplotlib.figure import Figure as MplFigure
@@ -41,6 +41,9 @@ from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS, cost_column, p
 from foucault_bench.reports import charts, interactive, tables
 from foucault_bench.reports.document import Block, Figure, Heading, Paragraph, Table, write_document, write_table_files
 from foucault_bench.reports.seed import seed_blocks
+
+if TYPE_CHECKING:
+    from plotly.graph_objects import Figure as PlotlyFigure
 
 DEFAULT_OUT = Path("results") / "report"
 FIGURES = "figures"
@@ -105,7 +108,7 @@ class _Builder:
         self.blocks.extend(blocks)
 
     def figure(self, name: str, caption: str, draw: Callable[[Path], Path],
-               draw_interactive: Callable[[], "plotly.graph_objects.Figure"] | None = None) -> None:
+               draw_interactive: Callable[[], PlotlyFigure] | None = None) -> None:
         """Write the static chart ``draw(stem)`` under figures/ and, when the report is interactive, add the
         plotly figure ``draw_interactive()`` to the page."""
         draw(self.folder / FIGURES / name)
