@@ -409,7 +409,7 @@ def render_text(advice: Advice) -> str:
         for index, record in enumerate(advice.alternatives):
             ratio = record["cost_s"] / advice.recommended["cost_s"]
             lines.append(f"{'next:' if index == 0 else '':12s} {_run_text(record, target.metric, advice.cost)} "
-                         f"({ratio:.2g}× the cost)")
+                         f"({ratio:.3g}× the cost)")
     lines.append(f"model: {advice.model['text']}")
     lines.append(f"from {advice.stored_runs} stored runs of {advice.scene.name}; {advice.meeting} meet the target")
     lines += [f"note: {note}" for note in advice.notes]
