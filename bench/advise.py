@@ -223,9 +223,11 @@ def model_advice(adequacy: pd.DataFrame, scene: Scene, target: Target) -> dict[s
 
 
 def _model_rank(model: str) -> int:
-    from foucault_bench.bench.problems.adequacy import MODEL_HIERARCHY
+    """Place of a model in ``models.MODELS``, simplest first (by the hierarchy ``Model.refines`` declares)."""
+    from foucault_bench.models import MODELS
 
-    return MODEL_HIERARCHY.index(model) if model in MODEL_HIERARCHY else len(MODEL_HIERARCHY)
+    order = list(MODELS)
+    return order.index(model) if model in order else len(order)
 
 
 def _adequacy_rows(store: ResultsStore, runs: pd.DataFrame, scene: Scene) -> pd.DataFrame:
