@@ -36,7 +36,8 @@ AWKWARD = pd.DataFrame({
 
 def _report_tables() -> dict[str, pd.DataFrame]:
     runs = results_fixture()
-    return {"matched_accuracy": tables.matched_accuracy(runs), "shootout": tables.shootout(runs),
+    return {"matched_accuracy": tables.matched_accuracy(runs), "per_integrator": tables.per_integrator(runs),
+            "fronts": tables.fronts(runs), "families": tables.families(runs),
             "convergence_orders": tables.convergence_orders(runs), "runs_compact": tables.compact_table(runs),
             "runs_full": tables.full_table(runs), "model_adequacy": adequacy_fixture(), "awkward": AWKWARD}
 
@@ -122,10 +123,10 @@ def test_the_all_runs_table_folds_and_filters() -> None:
 
 
 def test_the_figure_counter_shows_a_total(tmp_path: Path, capsys) -> None:
-    builder = _Builder(tmp_path, progress=True)
+    builder = _Builder(tmp_path, progress=True, interactive=False)
     drawn = []
     for name in ("a", "b", "c"):
-        builder.figure(lambda stem, name=name: drawn.append(stem.name) or stem, name, f"figure {name}")
+        builder.figure(name, f"figure {name}", lambda stem: drawn.append(stem.name) or stem)
     assert drawn == []  # counted first, drawn after
     builder.draw_figures()
     assert drawn == ["a", "b", "c"]
