@@ -29,6 +29,11 @@ STATUS_OK = "ok"
 STATUS_DIVERGED = "diverged"
 STATUS_FAILED = "failed"
 
+COST_COMPILED = "compiled"
+COST_PYTHON_DRIVEN = "python-driven"
+COST_BASES = (COST_COMPILED, COST_PYTHON_DRIVEN)
+"""Values of ``Integrator.cost_basis``: how the timed call's cost arises (see there)."""
+
 
 @dataclass(frozen=True, eq=False)
 class Problem:
@@ -115,6 +120,11 @@ class Integrator(ABC):
         stability_limit_kh: largest stable k·h on the undamped oscillator ẍ = −k²x (``None`` if unstable
             for every h or not applicable).
         reference: where the method is described.
+        cost_basis: how the measured cost arises: ``"compiled"`` when the whole integration runs in compiled
+            code (no Python call per step or per right-hand-side evaluation), ``"python-driven"`` when a Python
+            loop or Python callbacks drive the library (the cost then includes the interpreter's overhead per
+            step or evaluation); ``None`` where an integrator does not declare it. The report says it per
+            integrator next to the cost charts.
     """
 
     name: ClassVar[str]
@@ -124,6 +134,7 @@ class Integrator(ABC):
     adaptive: ClassVar[bool]
     stability_limit_kh: ClassVar[float | None] = None
     reference: ClassVar[str]
+    cost_basis: ClassVar[str | None] = None
 
     def solve(self, problem: Problem, *, step_s: float | None = None, tol: float | None = None,
               monitor: bool = True) -> Solution:
@@ -181,6 +192,7 @@ class Integrator(ABC):
             "adaptive": self.adaptive,
             "stability_limit_kh": self.stability_limit_kh,
             "reference": self.reference,
+            "cost_basis": self.cost_basis,
         }
 
 

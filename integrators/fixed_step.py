@@ -23,7 +23,7 @@ from typing import Callable, ClassVar
 import numpy as np
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
-from foucault_bench.integrators.base import STATUS_DIVERGED, Integrator, Problem, Solution, StreamedMetrics
+from foucault_bench.integrators.base import COST_COMPILED, STATUS_DIVERGED, Integrator, Problem, Solution, StreamedMetrics
 from foucault_bench.models import Model
 from foucault_bench.models.jit import jit
 from foucault_bench.models.parameters import PARAMETER_VECTOR_NAMES
@@ -157,6 +157,7 @@ class FixedStepIntegrator(Integrator):
     """Base of the compiled fixed-step schemes: a subclass only builds its numba step function."""
 
     adaptive: ClassVar[bool] = False
+    cost_basis: ClassVar[str] = COST_COMPILED
 
     @abstractmethod
     def make_step(self, model: Model) -> Callable:

@@ -56,7 +56,7 @@ from foucault_bench.integrators.adaptive import (
     step_budget,
     turning_points,
 )
-from foucault_bench.integrators.base import STATUS_DIVERGED, STATUS_FAILED, Problem, Solution, StreamedMetrics
+from foucault_bench.integrators.base import COST_COMPILED, STATUS_DIVERGED, STATUS_FAILED, Problem, Solution, StreamedMetrics
 from foucault_bench.integrators.registry import register
 from foucault_bench.models import Model
 
@@ -116,6 +116,7 @@ class HeyokaTaylor(AdaptiveIntegrator):
     family: ClassVar[str] = "taylor"
     order: ClassVar[int | None] = None
     precision: ClassVar[str] = "double"
+    cost_basis: ClassVar[str] = COST_COMPILED  # LLVM-compiled Taylor steps; one Python call per solve
     reference: ClassVar[str] = (
         "Biscani & Izzo, MNRAS 504, 2614 (2021); Jorba & Zou, Exp. Math. 14, 99 (2005); heyoka 7.13 docs"
     )

@@ -33,7 +33,7 @@ import numpy as np
 from scipy.integrate import DOP853, LSODA, RK45, OdeSolver, solve_ivp
 
 from foucault_bench.integrators.adaptive import AdaptiveIntegrator, absolute_tolerance, step_budget, turning_points
-from foucault_bench.integrators.base import STATUS_FAILED, Problem, Solution, StreamedMetrics
+from foucault_bench.integrators.base import COST_PYTHON_DRIVEN, STATUS_FAILED, Problem, Solution, StreamedMetrics
 from foucault_bench.integrators.registry import register
 
 SCIPY_MIN_RTOL = 100.0 * np.finfo(np.float64).eps
@@ -92,6 +92,7 @@ class ScipyIvpIntegrator(AdaptiveIntegrator):
 
     solver_class: ClassVar[type[OdeSolver]]
     uses_jacobian: ClassVar[bool] = False
+    cost_basis: ClassVar[str] = COST_PYTHON_DRIVEN  # solve_ivp's Python step loop, a Python call per evaluation
 
     def __init__(self, max_steps: int | None = None) -> None:
         if max_steps is not None and max_steps < 1:

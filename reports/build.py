@@ -27,7 +27,8 @@ from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.schema import COLUMN_NAMES
 from foucault_bench.bench.run.store import DEFAULT_DB, ResultsStore
 from foucault_bench.reports.studies import STUDIES, ensure_studies
-from foucault_bench.integrators import STATUS_OK
+from foucault_bench.integrators import REGISTRY, STATUS_OK
+from foucault_bench.integrators.base import COST_COMPILED, COST_PYTHON_DRIVEN
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
 from foucault_bench.reports import charts, tables
 from foucault_bench.reports.document import Block, Figure, Heading, Paragraph, Table, write_document, write_table_files
@@ -119,12 +120,17 @@ def _summary_tables(builder: _Builder, runs: pd.DataFrame) -> None:
 
 def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
     builder.add(Heading("Work-precision"), Paragraph(
-        "Each verdict against the two costs, wall time and right-hand-side evaluations, one line per integrator. "
+        "Each verdict against two costs, one line per integrator: the CPU time of the worker thread (median of "
+        "the timed repeats, compile time excluded; the error bar's length is max − min of the repeats), and the "
+        "accepted steps, counted for every family (what one step costs differs: s right-hand-side evaluations "
+        "for a Runge-Kutta method, one corrector solve for a multistep method, one order-p Taylor expansion for "
+        "heyoka, which is why Taylor steps are not drawn as right-hand-side evaluations). "
         "The energy error is the largest deviation over the run; the energy drift its least-squares trend, "
         "which tells a drifting integrator from one whose error oscillates within a bound. "
         "The precession-rate error is the integrator's own: measured rate against the reference solution's rate "
         "on the same grid. The analytic gap is the distance from the exact solution of the linear model, a model "
         "error for the other models."))
+    builder.add(Paragraph(cost_basis_sentences(runs)))
     for scene, scene_runs in runs.groupby("scene", sort=True):
         builder.add(Heading(f"Scene {scene}", level=3))
         for verdict, (title, label) in charts.VERDICT_LABELS.items():
@@ -132,8 +138,30 @@ def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
                 builder.add(Paragraph(f"{scene}: no {title} values in the results ({verdict} is empty)."))
                 continue
             builder.figure(charts.work_precision, f"work_precision_{scene}_{verdict}",
-                           f"{scene}: {title} ({label}) against wall time and right-hand-side evaluations.",
+                           f"{scene}: {title} ({label}) against CPU time and accepted steps.",
                            scene_runs, verdict)
+
+
+COST_BASIS_MEANING = {
+    COST_COMPILED: "compiled (the whole integration runs in compiled code, no Python call per step or per "
+                   "right-hand-side evaluation)",
+    COST_PYTHON_DRIVEN: "Python-driven (a Python step loop or Python callbacks drive the library, so the cost "
+                        "includes the interpreter's overhead per step or evaluation)",
+    None: "not declared by the integrator",
+}
+
+
+def cost_basis_sentences(runs: pd.DataFrame) -> str:
+    """One sentence per family saying how its integrators' cost was measured (``Integrator.cost_basis``)."""
+    sentences = []
+    for family, names in runs.groupby("family", sort=True)["integrator"]:
+        by_basis: dict[str | None, list[str]] = {}
+        for name in sorted(set(names)):
+            integrator = REGISTRY.get(name)
+            by_basis.setdefault(getattr(integrator, "cost_basis", None), []).append(name)
+        parts = [f"{', '.join(members)}: {COST_BASIS_MEANING.get(basis, basis)}" for basis, members in by_basis.items()]
+        sentences.append(f"Family {family}: " + "; ".join(parts) + ".")
+    return "How each cost was measured. " + " ".join(sentences)
 
 
 def _convergence(builder: _Builder, runs: pd.DataFrame) -> None:

@@ -143,10 +143,13 @@ def outcome_legend_handles() -> list[Line2D]:
     ]
 
 
-def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str) -> list[Line2D]:
+def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str,
+                x_spread_column: str | None = None) -> list[Line2D]:
     """One line per integrator through its ok runs in sweep order (largest k·h or tolerance first); diverged and
-    failed runs and ok runs without a plottable value as edge markers. Returns one legend handle per integrator,
-    labelled with its counts of diverged and failed runs."""
+    failed runs and ok runs without a plottable value as edge markers. With ``x_spread_column`` (max − min of
+    the timed repeats) each point gets a horizontal error bar of that total length, centred on the median and
+    clipped at the axis' positive range. Returns one legend handle per integrator, labelled with its counts of
+    diverged and failed runs."""
     handles = []
     left_slots = {"top": 0, "bottom": 0}
     for integrator, family in _ordered_integrators(frame):
@@ -164,6 +167,13 @@ def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str) -
         label = integrator + (f" ({', '.join(counts)})" if counts else "")
         (line,) = axes.plot(x[plottable][order], y[plottable][order], label=label, markersize=5, **style)
         handles.append(line)
+        if x_spread_column is not None and x_spread_column in ok:
+            half = 0.5 * ok[x_spread_column].to_numpy(dtype=float)[plottable]
+            shown = np.isfinite(half)
+            centre = x[plottable][shown]
+            lower = np.minimum(half[shown], 0.5 * centre)  # a log axis cannot show a bar reaching 0
+            axes.errorbar(centre, y[plottable][shown], xerr=np.vstack([lower, half[shown]]), fmt="none",
+                          ecolor=style["color"], elinewidth=1.0, capsize=2.5, alpha=0.8)
         left_slots["bottom"] += mark_on_edge(axes, x[~plottable], style["color"], NO_VALUE_MARKER, "bottom",
                                              left_slots["bottom"])
         for status, marker in ((STATUS_DIVERGED, DIVERGED_MARKER), (STATUS_FAILED, FAILED_MARKER)):
@@ -185,14 +195,20 @@ VERDICT_LABELS: dict[str, tuple[str, str]] = {
 """Verdict column → (short title, axis label) for the work-precision charts (absolute values are plotted)."""
 
 COST_LABELS: dict[str, str] = {
-    "wall_time_s": "wall time per run (s), median of repeats",
-    "nfev": "right-hand-side evaluations (heyoka: Taylor steps)",
+    "cpu_time_s": "CPU time per run (s): median of the timed repeats, bar = max − min",
+    "steps": "accepted steps (one step = s RHS evaluations for Runge-Kutta,\n"
+             "one corrector solve for multistep, one order-p Taylor expansion for heyoka)",
 }
+"""Cost column → axis label of the work-precision charts. Steps are counted for every family, so no method is
+drawn on an axis whose unit does not apply to it (a Taylor step is not a right-hand-side evaluation); what a
+step costs differs by family, which the CPU-time panel shows."""
+COST_SPREADS: dict[str, str] = {"cpu_time_s": "cpu_time_spread_s"}
+"""Cost column → its spread column (drawn as error bars)."""
 
 
 def work_precision(scene_frame: pd.DataFrame, verdict: str, stem: Path) -> Path:
-    """Verdict against wall time and against right-hand-side evaluations for one scene, one line per
-    integrator, fixed-step and tolerance sweeps on the same axes."""
+    """Verdict against CPU time (with the spread of the repeats as error bars) and against accepted steps for
+    one scene, one line per integrator, fixed-step and tolerance sweeps on the same axes."""
     scene = scene_frame["scene"].iloc[0]
     title, label = VERDICT_LABELS[verdict]
     scene_frame = scene_frame.assign(**{verdict: scene_frame[verdict].abs()})
@@ -200,7 +216,7 @@ def work_precision(scene_frame: pd.DataFrame, verdict: str, stem: Path) -> Path:
     axes_pair = figure.subplots(1, 2, sharey=True)
     handles = []
     for axes, cost in zip(axes_pair, COST_LABELS):
-        handles = plot_sweeps(axes, scene_frame, cost, verdict)
+        handles = plot_sweeps(axes, scene_frame, cost, verdict, COST_SPREADS.get(cost))
         set_log_scales(axes)
         axes.set_xlabel(COST_LABELS[cost])
         axes.grid(True, which="major", alpha=0.3)

@@ -59,18 +59,20 @@ def results_fixture() -> pd.DataFrame:
                 step = 0.5 * kh
                 if integrator == "explicit_euler" and kh == KH_SWEEP[0]:
                     rows.append(_row(scene, integrator, kh=kh, step_s=step, status="diverged",
-                                     message=DIVERGED_MESSAGE, wall_time_s=1e-4, nfev=10))
+                                     message=DIVERGED_MESSAGE, wall_time_s=1e-4, cpu_time_s=1e-4, nfev=10, steps=10))
                     continue
                 rows.append(_row(scene, integrator, kh=kh, step_s=step, reference_error=1e-2 * step**order,
-                                 wall_time_s=1e-3 / kh, nfev=int(1000 / kh)))
+                                 wall_time_s=1e-3 / kh, cpu_time_s=1e-3 / kh, cpu_time_spread_s=1e-4 / kh,
+                                 nfev=int(1000 / kh), steps=int(1000 / kh)))
         for tol, wall in ((1e-6, 2e-3), (1e-9, 4e-3), (1e-12, np.nan)):
             if math.isnan(wall):
                 rows.append(_row(scene, "cvode_adams", tol=tol, status="failed", message=FAILED_MESSAGE))
             else:
                 rows.append(_row(scene, "cvode_adams", tol=tol, reference_error=10 * tol, wall_time_s=wall,
-                                 nfev=int(-100 * math.log10(tol))))
+                                 cpu_time_s=wall, cpu_time_spread_s=0.1 * wall, nfev=int(-100 * math.log10(tol))))
         for tol, wall in ((1e-9, 1e-3), (1e-15, 2e-3)):
-            rows.append(_row(scene, "heyoka_taylor", tol=tol, reference_error=tol, wall_time_s=wall, nfev=50))
+            rows.append(_row(scene, "heyoka_taylor", tol=tol, reference_error=tol, wall_time_s=wall, cpu_time_s=wall,
+                             cpu_time_spread_s=0.1 * wall, nfev=50, steps=50))
         rows.append(_row(scene, "scipy_lsoda", tol=1e-8, status="failed", message=FAILED_MESSAGE))
     return pd.DataFrame(rows, columns=list(COLUMN_NAMES))
 
@@ -260,3 +262,12 @@ def test_a_scene_where_every_run_failed_still_draws_and_tabulates(tmp_path: Path
     assert stem.with_suffix(".png").stat().st_size > 0 and stem.with_suffix(".svg").stat().st_size > 0
     summary = tables.matched_accuracy(failed)
     assert list(summary["outcome"]) == ["no ok run (failed)"] and list(summary["failed"]) == [1]
+
+
+def test_report_says_how_each_family_cost_was_measured(tmp_path: Path) -> None:
+    from foucault_bench.reports.build import cost_basis_sentences
+
+    text = cost_basis_sentences(results_fixture())
+    assert "Family runge-kutta: rk4: compiled" in text
+    assert "Family taylor: heyoka_taylor: compiled" in text
+    assert "scipy_lsoda: Python-driven" in text
