@@ -51,10 +51,10 @@ COLUMNS: tuple[Column, ...] = (
     Column("wall_time_s", "REAL", "s", "median wall time of the timed repeats (compile excluded): what a user waits, grows when runs share a core"),
     Column("wall_time_spread_s", "REAL", "s", "max − min of the timed repeats' wall times"),
     Column("repeats", "INTEGER", "", "timed repeats after the warm-up"),
-    Column("compile_time_s", "REAL", "s", "first-call time minus median run time (JIT compile or cache load)"),
+    Column("compile_time_s", "REAL", "s", "first-call wall time minus the median wall time (JIT compile or cache load)"),
     Column("nfev", "INTEGER", "", "right-hand-side evaluations (for heyoka: Taylor steps, each an order-p expansion, not comparable)"),
     Column("njev", "INTEGER", "", "Jacobian evaluations where reported"),
-    Column("steps", "INTEGER", "", "accepted steps"),
+    Column("steps", "INTEGER", "", "accepted steps (the charts' second cost axis, counted for every family; one step = s RHS evaluations for Runge-Kutta, one order-p Taylor expansion for heyoka)"),
     Column("rejected_steps", "INTEGER", "", "rejected steps where the library reports them"),
     Column("peak_rss_mb", "REAL", "MB", "peak resident memory of the worker after the run"),
 )

@@ -125,6 +125,10 @@ class Integrator(ABC):
             loop or Python callbacks drive the library (the cost then includes the interpreter's overhead per
             step or evaluation); ``None`` where an integrator does not declare it. The report says it per
             integrator next to the cost charts.
+        streams_step_metrics: ``True`` if ``solve(monitor=True)`` streams verdict ingredients that the output
+            grid cannot give (``StreamedMetrics.energy_max_rel_error`` over every step). The runner times
+            ``monitor=False`` calls for every integrator, so that the timed work is the same for all (integrate
+            to the output grid), and makes one extra untimed ``monitor=True`` call only where this is ``True``.
     """
 
     name: ClassVar[str]
@@ -135,6 +139,7 @@ class Integrator(ABC):
     stability_limit_kh: ClassVar[float | None] = None
     reference: ClassVar[str]
     cost_basis: ClassVar[str | None] = None
+    streams_step_metrics: ClassVar[bool] = False
 
     def solve(self, problem: Problem, *, step_s: float | None = None, tol: float | None = None,
               monitor: bool = True) -> Solution:

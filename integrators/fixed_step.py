@@ -158,6 +158,7 @@ class FixedStepIntegrator(Integrator):
 
     adaptive: ClassVar[bool] = False
     cost_basis: ClassVar[str] = COST_COMPILED
+    streams_step_metrics: ClassVar[bool] = True  # the per-step energy error, which the grid cannot give
 
     @abstractmethod
     def make_step(self, model: Model) -> Callable:

@@ -106,6 +106,11 @@ def test_quick_matrix_runs_end_to_end(tmp_path, capsys):
     ok = rows[rows["status"] == "ok"]
     assert ok["reference_error"].notna().all() and ok["energy_max_rel_error"].notna().all()
     assert (ok["wall_time_s"] > 0).all() and (ok["repeats"] >= 1).all() and (ok["peak_rss_mb"] > 0).all()
+    assert (ok["cpu_time_s"] > 0).all() and (ok["cpu_time_spread_s"] >= 0).all()
+    # the per-step energy error comes from the untimed monitored call, for the fixed-step loops only
+    fixed = ok["kh"].notna()
+    assert ok.loc[fixed, "energy_max_rel_error_steps"].notna().all()
+    assert ok.loc[~fixed, "energy_max_rel_error_steps"].isna().all()
     # every integrator of a scene on the scene's own output grid (no run stores its steps)
     grid_points = {scene.name: scene.n_intervals + 1 for scene in matrix.scenes}
     assert (rows["n_out"] == rows["scene"].map(grid_points)).all()

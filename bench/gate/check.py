@@ -79,7 +79,8 @@ ERROR_COLUMNS: tuple[str, ...] = tuple(name for name in VERDICT_COLUMNS if name 
 VALUE_COLUMNS: tuple[str, ...] = (*VERDICT_COLUMNS, "precession_rate_rad_s", "nfev", "njev", "steps",
                                   "rejected_steps")
 """Deterministic columns that ``max``, ``min`` and ``max_abs`` may bound."""
-MACHINE_COLUMNS: tuple[str, ...] = ("wall_time_s", "wall_time_spread_s", "compile_time_s", "peak_rss_mb")
+MACHINE_COLUMNS: tuple[str, ...] = ("cpu_time_s", "cpu_time_spread_s", "wall_time_s", "wall_time_spread_s",
+                                     "compile_time_s", "peak_rss_mb")
 """Columns that depend on the machine and its load: bounded only as ratios within one matrix run."""
 RATIO_COLUMNS: tuple[str, ...] = (*VALUE_COLUMNS, *MACHINE_COLUMNS)
 

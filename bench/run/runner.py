@@ -8,9 +8,13 @@ Order of work (``run_matrix``):
    model-adequacy rows (``bench.problems.adequacy.model_adequacy``), stored in the ``adequacy`` table; a scene whose
    reference cannot be computed has all its runs stored as ``failed`` rows with the reason;
 3. every run (``execute_run``): the integrator's ``solve`` on the scene's problem (the scene's output grid,
-   identical for every integrator; fixed-step runs stream their step-wise metrics and never store steps),
-   timed by the protocol of ``bench.run.timing``, verdicts from ``bench.verdicts.columns.compute_verdicts`` on the
-   warm-up call's solution; the row is written as soon as the run finishes.
+   identical for every integrator), timed by the protocol of ``bench.run.timing``; the timed call does the
+   same work for every integrator, integrate to the output grid (``monitor=False``: no event detection, no
+   streamed metrics); turning points and energies are computed from the grid afterwards, by one procedure for
+   all (``bench.verdicts.columns.compute_verdicts``). Integrators that stream a verdict ingredient the grid
+   cannot give (``Integrator.streams_step_metrics``: the fixed-step loops' per-step energy error) make one
+   extra, untimed ``monitor=True`` call, whose states must equal the timed ones; the row is written as soon as
+   the run finishes.
 
 Nothing is lost when one run fails: an exception anywhere in a run (solver, verdicts, a plug-in) becomes a
 ``failed`` row with the reason, and a worker process that dies (a crash in a native library, the OOM killer)
@@ -121,11 +125,13 @@ def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
         row["n_out"] = int(problem.t_out.size)
         row["energy_conserved"] = int(problem.model.conserves_energy)
         stage = "solve"
-        first, last, timing = time_repeated(
-            lambda: integrator.solve(problem, step_s=spec.step_s, tol=spec.tol, monitor=True),
-            spec.timing,
-            accept=lambda solution: solution.status == STATUS_OK,
-        )
+
+        def solve(monitor: bool):
+            return integrator.solve(problem, step_s=spec.step_s, tol=spec.tol, monitor=monitor)
+
+        timed, last, timing = time_repeated(lambda: solve(False), spec.timing,
+                                            accept=lambda solution: solution.status == STATUS_OK)
+        first = solve(True) if integrator.streams_step_metrics else timed  # untimed: + per-step metrics
         row.update(
             status=first.status,
             message=first.message,
@@ -138,9 +144,10 @@ def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
             row["step_s"] = first.step_size_s
             row["kh"] = first.step_size_s * scene.params.pendulum_frequency_rad_s
         if timing is not None:
-            row.update(wall_time_s=timing.median_s, wall_time_spread_s=timing.spread_s, repeats=timing.repeats,
+            row.update(cpu_time_s=timing.cpu_median_s, cpu_time_spread_s=timing.cpu_spread_s,
+                       wall_time_s=timing.median_s, wall_time_spread_s=timing.spread_s, repeats=timing.repeats,
                        compile_time_s=timing.compile_s)
-            if first.y.tobytes() != last.y.tobytes():
+            if not first.y.tobytes() == timed.y.tobytes() == last.y.tobytes():
                 row["message"] = "; ".join(filter(None, [row["message"], NOT_DETERMINISTIC]))
         stage = "verdicts"  # also for diverged runs: energy and trajectory gaps up to the divergence
         verdicts = compute_verdicts(scene, first, reference_for(scene))

@@ -52,7 +52,7 @@ DETERMINISTIC_COLUMNS: tuple[str, ...] = (
 )
 """Columns that must be identical bit for bit when the same matrix runs twice on the same machine."""
 
-COST_COLUMNS: tuple[str, ...] = ("wall_time_s", "compile_time_s", "peak_rss_mb")
+COST_COLUMNS: tuple[str, ...] = ("cpu_time_s", "wall_time_s", "compile_time_s", "peak_rss_mb")
 
 MATRIX_RUN_COLUMNS: tuple[tuple[str, str], ...] = (
     ("matrix_id", "TEXT PRIMARY KEY"),
