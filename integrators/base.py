@@ -17,6 +17,7 @@ import contextlib
 import math
 import os
 import sys
+import threading
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import ClassVar, Iterator
@@ -201,26 +202,43 @@ class Integrator(ABC):
         }
 
 
+_quiet_lock = threading.Lock()
+_quiet_users = 0
+_quiet_saved: list[tuple[int, int]] = []
+_devnull: list[int] = []  # /dev/null opened once per process (an open per solve cost a few µs)
+
+
 @contextlib.contextmanager
 def quiet_native_output() -> Iterator[None]:
     """Redirect the process's stdout and stderr file descriptors to /dev/null for the duration, so that
     native libraries (SUNDIALS warnings) do not write over the terminal or a progress bar. Python-level
-    writes are flushed first; nothing is redirected when the descriptors are not available."""
+    writes are flushed first; nothing is redirected when the descriptors are not available.
+
+    Thread-safe: the descriptors belong to the process, so when several threads solve at once (a Dask worker
+    running tasks in threads) the first one in redirects them and the last one out restores them."""
+    global _quiet_users
     try:
         fds = (sys.stdout.fileno(), sys.stderr.fileno())
     except (AttributeError, OSError, ValueError):
         yield
         return
-    sys.stdout.flush()
-    sys.stderr.flush()
-    saved = [os.dup(fd) for fd in fds]
-    devnull = os.open(os.devnull, os.O_WRONLY)
+    with _quiet_lock:
+        if _quiet_users == 0:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            if not _devnull:
+                _devnull.append(os.open(os.devnull, os.O_WRONLY))
+            _quiet_saved[:] = [(fd, os.dup(fd)) for fd in fds]
+            for fd in fds:
+                os.dup2(_devnull[0], fd)
+        _quiet_users += 1
     try:
-        for fd in fds:
-            os.dup2(devnull, fd)
         yield
     finally:
-        for fd, copy in zip(fds, saved):
-            os.dup2(copy, fd)
-            os.close(copy)
-        os.close(devnull)
+        with _quiet_lock:
+            _quiet_users -= 1
+            if _quiet_users == 0:
+                for fd, saved in _quiet_saved:
+                    os.dup2(saved, fd)
+                    os.close(saved)
+                _quiet_saved.clear()

@@ -10,9 +10,11 @@ facts. Configuration (SciPy reference guide, ``scipy.integrate.solve_ivp``):
 * **Right-hand side.** ``Model.numba_rhs`` (t, y, p) with ``args=(p,)``; LSODA, which switches to BDF when it
   detects stiffness, also gets ``Model.jacobian`` (heyoka's symbolic derivative of the model's source).
 * **Output.** ``t_eval`` = the output grid (each method's dense output; the steps are not changed by it).
-* **Turning points.** ``events`` on r·ṙ = xẋ + yẏ with ``direction = −1`` (radius maxima); scipy reports
-  the release point t = 0 as a root for a release from rest, which ``integrators.adaptive.turning_points``
-  drops.
+* **Turning points.** With ``monitor=True`` (the default of ``solve``), ``events`` on r·ṙ = xẋ + yẏ with
+  ``direction = −1`` (radius maxima); scipy reports the release point t = 0 as a root for a release from rest,
+  which ``integrators.adaptive.turning_points`` drops. The benchmark runner times ``monitor=False`` (no event
+  function: the same work as every other integrator; the verdicts take the turning points from the output
+  grid, ``bench.verdicts.turning_points``).
 * **Counters.** ``nfev``, ``njev`` from the result; ``steps`` = accepted steps, counted by a subclass of the
   method's ``OdeSolver`` (``solve_ivp`` accepts a solver class as ``method``) whose ``step`` counts successful
   calls; ``rejected_steps`` is ``None`` (scipy does not report it).
