@@ -8,7 +8,8 @@ for a compiled fixed-step scheme) in a file of its own, set the class attributes
 * turns every exception into a ``failed`` solution with the exception's message, and every non-finite
   state into a ``diverged`` one, so that no run crashes a benchmark matrix,
 * fills ``nfev`` from ``stages × steps`` where the integrator does not count evaluations itself,
-* silences the C libraries' chatter on stdout/stderr (SUNDIALS prints its warnings there).
+* silences the C libraries' chatter on stdout/stderr (SUNDIALS prints its warnings there;
+  ``silence_native_output``).
 """
 
 from __future__ import annotations
@@ -130,6 +131,9 @@ class Integrator(ABC):
             grid cannot give (``StreamedMetrics.energy_max_rel_error`` over every step). The runner times
             ``monitor=False`` calls for every integrator, so that the timed work is the same for all (integrate
             to the output grid), and makes one extra untimed ``monitor=True`` call only where this is ``True``.
+        silence_native_output: ``solve`` redirects the process's stdout and stderr while the integrator runs
+            (``quiet_native_output``: a few µs per call), for libraries that print (SUNDIALS); ``False`` for
+            one that reports only through return values.
     """
 
     name: ClassVar[str]
@@ -141,6 +145,7 @@ class Integrator(ABC):
     reference: ClassVar[str]
     cost_basis: ClassVar[str | None] = None
     streams_step_metrics: ClassVar[bool] = False
+    silence_native_output: ClassVar[bool] = True
 
     def solve(self, problem: Problem, *, step_s: float | None = None, tol: float | None = None,
               monitor: bool = True) -> Solution:
@@ -155,7 +160,7 @@ class Integrator(ABC):
         self.validate_setting(step_s=step_s, tol=tol)
         self.validate_problem(problem, step_s=step_s)
         try:
-            with quiet_native_output():
+            with quiet_native_output() if self.silence_native_output else contextlib.nullcontext():
                 solution = self._solve(problem, step_s=step_s, tol=tol, monitor=monitor)
         except Exception as exc:  # any library or numerical failure becomes a row, not a crash
             return Solution.failure(problem.t_out, f"{type(exc).__name__}: {exc}")
