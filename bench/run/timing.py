@@ -11,7 +11,9 @@ Timing protocol (``time_repeated``), the same for every integrator (defaults: ``
 2. timed repeats of the identical call until at least ``min_repeats`` repeats *and* ``min_total_s`` seconds
    of repeats are done, stopping at ``max_repeats``; when the warm-up call alone took longer than
    ``single_repeat_over_s`` a single timed repeat is made (a run that long is already a stable figure, and
-   three repeats of the slowest library runs would take most of the default matrix's budget);
+   three repeats of the slowest library runs would take most of the default matrix's budget). Both
+   decisions count CPU time (below), so that the number of repeats does not depend on the machine's load;
+   with a single repeat the spread is 0 (nothing to compare it with);
 3. the cost figures are the median of the repeats and their spread (max − min), each for two clocks, and
    the compile time ``warm-up − median`` in wall time (JIT compilation or numba cache load; clipped at 0
    because a warm-up that compiles nothing can be faster than the median on a noisy machine).
@@ -95,17 +97,18 @@ def time_repeated(call: Callable[[], Result], policy: TimingPolicy,
     timing; when ``accept(warm-up result)`` is false (a failed or diverged run) no repeat is made and the
     timing is ``None``.
     """
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.thread_time()
     first = call()
+    warm_up_cpu_s = time.thread_time() - cpu_start
     warm_up_s = time.perf_counter() - start
     if not accept(first):
         return first, first, None
-    wanted = 1 if warm_up_s > policy.single_repeat_over_s else policy.min_repeats
+    wanted = 1 if warm_up_cpu_s > policy.single_repeat_over_s else policy.min_repeats
     durations: list[float] = []
     cpu_durations: list[float] = []
     last = first
     while len(durations) < wanted or (
-        wanted > 1 and sum(durations) < policy.min_total_s and len(durations) < policy.max_repeats
+        wanted > 1 and sum(cpu_durations) < policy.min_total_s and len(durations) < policy.max_repeats
     ):
         start, cpu_start = time.perf_counter(), time.thread_time()
         last = call()
