@@ -323,7 +323,7 @@ class ResultsStore:
 
 def summarize(frame: pd.DataFrame) -> pd.DataFrame:
     """One line per scene × integrator: run counts by status, the best (smallest) reference error among the
-    ok runs, the setting that reached it and its cost (median wall time, right-hand-side evaluations)."""
+    ok runs, the setting that reached it and its cost (median CPU time of the worker thread, steps)."""
     lines = []
     for (scene, integrator), group in frame.groupby(["scene", "integrator"]):
         ok = group[group["status"] == "ok"]
@@ -337,8 +337,8 @@ def summarize(frame: pd.DataFrame) -> pd.DataFrame:
             "failed": int((group["status"] == "failed").sum()),
             "best_reference_error": None if best is None else best["reference_error"],
             "at": None if best is None else setting_label(best["kh"], best["tol"]),
-            "wall_time_s": None if best is None else best["wall_time_s"],
-            "nfev": None if best is None else best["nfev"],
+            "cpu_time_s": None if best is None else best["cpu_time_s"],
+            "steps": None if best is None else best["steps"],
         })
     return pd.DataFrame(lines)
 
