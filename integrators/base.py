@@ -15,13 +15,14 @@ for a compiled fixed-step scheme) in a file of its own, set the class attributes
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import os
 import sys
 import threading
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from typing import ClassVar, Iterator
+from typing import ClassVar, Iterator, TextIO
 
 import numpy as np
 
@@ -209,33 +210,38 @@ class Integrator(ABC):
 
 _quiet_lock = threading.Lock()
 _quiet_users = 0
-_quiet_saved: list[tuple[int, int]] = []
-_devnull: list[int] = []  # /dev/null opened once per process (an open per solve cost a few µs)
+_quiet_saved: list = []  # the Python streams and (fd, saved copy) pairs, restored by the last thread out
 
 
 @contextlib.contextmanager
 def quiet_native_output() -> Iterator[None]:
-    """Redirect the process's stdout and stderr file descriptors to /dev/null for the duration, so that
-    native libraries (SUNDIALS warnings) do not write over the terminal or a progress bar. Python-level
-    writes are flushed first; nothing is redirected when the descriptors are not available.
+    """Silence everything printed for the duration, so that native libraries (SUNDIALS warnings, printed by C
+    code or by a binding's Python error handler) do not write over the terminal or a progress bar: the
+    process's stdout and stderr file descriptors (1 and 2, where C code writes whatever ``sys.stdout`` is) go
+    to /dev/null, and so do ``sys.stdout`` and ``sys.stderr``. Python-level writes are flushed first; the
+    descriptors are left alone when they are not open.
 
-    Thread-safe: the descriptors belong to the process, so when several threads solve at once (a Dask worker
-    running tasks in threads) the first one in redirects them and the last one out restores them."""
+    Thread-safe: the descriptors and ``sys.stdout`` belong to the process, so when several threads solve at
+    once (a Dask worker running tasks in threads) the first one in redirects them and the last one out
+    restores them."""
     global _quiet_users
-    try:
-        fds = (sys.stdout.fileno(), sys.stderr.fileno())
-    except (AttributeError, OSError, ValueError):
-        yield
-        return
     with _quiet_lock:
         if _quiet_users == 0:
-            sys.stdout.flush()
-            sys.stderr.flush()
-            if not _devnull:
-                _devnull.append(os.open(os.devnull, os.O_WRONLY))
-            _quiet_saved[:] = [(fd, os.dup(fd)) for fd in fds]
-            for fd in fds:
-                os.dup2(_devnull[0], fd)
+            for stream in {sys.stdout, sys.stderr, sys.__stdout__, sys.__stderr__}:
+                if stream is not None:
+                    stream.flush()
+            sink = _devnull()
+            streams = (sys.stdout, sys.stderr)
+            sys.stdout = sys.stderr = sink
+            try:
+                for fd in (1, 2):
+                    os.fstat(fd)
+                descriptors = [(fd, os.dup(fd)) for fd in (1, 2)]
+            except OSError:  # descriptors not open: only the Python streams are redirected
+                descriptors = []
+            for fd, _ in descriptors:
+                os.dup2(sink.fileno(), fd)
+            _quiet_saved[:] = [streams, descriptors]
         _quiet_users += 1
     try:
         yield
@@ -243,7 +249,14 @@ def quiet_native_output() -> Iterator[None]:
         with _quiet_lock:
             _quiet_users -= 1
             if _quiet_users == 0:
-                for fd, saved in _quiet_saved:
+                (sys.stdout, sys.stderr), descriptors = _quiet_saved
+                for fd, saved in descriptors:
                     os.dup2(saved, fd)
                     os.close(saved)
                 _quiet_saved.clear()
+
+
+@functools.cache
+def _devnull() -> TextIO:
+    """/dev/null opened once per process for writing (``quiet_native_output`` runs around every solve)."""
+    return open(os.devnull, "w")  # kept open for the life of the process

@@ -7,10 +7,11 @@ before each call). Target: adapter ≤ 1.05× the bare call. Both sides must ret
 what remains is the adapter's own work (validation, bookkeeping, silencing the C libraries' output, the step
 guards of the scipy adapter, the reset of heyoka's reused integrator).
 
-Also reported for CVODE: the time per right-hand-side evaluation of a whole solve, the cost of one call of
-the numba right-hand side from Python, the same solve's cost per evaluation with a plain-Python oscillator
+Also reported for CVODE: the time per right-hand-side evaluation of a whole scikit-sundae solve
+(``cvode_*_py``; the compiled ``cvode_*`` are in section ``cvode``), the cost of one call of the numba
+right-hand side from Python, the same solve's cost per evaluation with a plain-Python oscillator
 (scikit-sundae's own per-callback cost), and the effect of the analytic Jacobian (heyoka's symbolic
-derivative, ``Model.jacobian_into``) against CVODE's internal difference quotients.
+derivative compiled by numba, ``Model.numba_jacobian_into``) against CVODE's internal difference quotients.
 
 Setting: the 3 m laboratory pendulum of ``bench.problems.scenes`` (spherical model, the physical one) over
 ``DURATION_S`` with its 0.45 s output grid, tol = ``TOL``. Timed by the thread's CPU time (every library here
@@ -47,12 +48,12 @@ def _scene_problem(quick: bool):
 
 
 def bare_cvode(problem, method: str, analytic_jacobian: bool = True) -> Callable[[], Any]:
-    """scikit-sundae's CVODE with the adapter's right-hand side, Jacobian, tolerances and grid."""
+    """scikit-sundae's CVODE with the ``cvode_*_py`` adapter's right-hand side, Jacobian, tolerances and grid."""
     from sksundae.cvode import CVODE
 
     p = problem.parameter_vector
     rhs_into = problem.model.numba_rhs_into
-    jacobian_into = problem.model.jacobian_into
+    jacobian_into = problem.model.numba_jacobian_into
 
     def rhs(t, y, yp):
         rhs_into(t, y, yp, p)
@@ -108,8 +109,8 @@ def _final_state(result: Any) -> np.ndarray:
 
 
 BARE: dict[str, Callable] = {
-    "cvode_adams": lambda problem: bare_cvode(problem, "Adams"),
-    "cvode_bdf": lambda problem: bare_cvode(problem, "BDF"),
+    "cvode_adams_py": lambda problem: bare_cvode(problem, "Adams"),
+    "cvode_bdf_py": lambda problem: bare_cvode(problem, "BDF"),
     "heyoka_taylor": bare_heyoka,
     "scipy_dop853": lambda problem: bare_solve_ivp(problem, "DOP853"),
     "scipy_rk45": lambda problem: bare_solve_ivp(problem, "RK45"),
