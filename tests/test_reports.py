@@ -271,3 +271,12 @@ def test_report_says_how_each_family_cost_was_measured(tmp_path: Path) -> None:
     assert "Family runge-kutta: rk4: compiled" in text
     assert "Family taylor: heyoka_taylor: compiled" in text
     assert "scipy_lsoda: Python-driven" in text
+
+
+def test_every_registered_integrator_says_how_its_cost_arises() -> None:
+    from foucault_bench.integrators import REGISTRY
+    from foucault_bench.integrators.base import COST_BASES
+
+    undeclared = {name: integrator.cost_basis for name, integrator in REGISTRY.items()
+                  if integrator.cost_basis not in COST_BASES}
+    assert not undeclared, undeclared

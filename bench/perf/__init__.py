@@ -9,13 +9,13 @@ Sections (one module each; each returns target rows and a detail table):
 
 * ``loops`` (``fixed_step``): fixed-step loops against plain C loops compiled now with ``cc -O3``;
 * ``adapters``: CVODE, heyoka and solve_ivp adapters against the bare libraries;
-* ``cvode``: CVODE with compiled callbacks against the same solves driven by scikit-sundae;
 * ``compile`` (``compile_cache``): cold and warm compile time per integrator;
 * ``memory``: peak RSS of 10⁷- and 10⁸-step runs with streaming verdicts;
 * ``sweeps``: a latitude sweep with heyoka's batch mode and ensembles against a scalar loop;
 * ``matrices``: wall time of the quick and default matrices, cold and warm (compile once);
-* ``limits``: each integrator family against its own limit (heyoka adapter against bare heyoka, ...) and
-  ``cpu_time_s`` at ``--jobs 2`` against ``--jobs 1``.
+* ``limits``: each integrator family against its own limit (compiled CVODE per right-hand-side evaluation
+  against scikit-sundae's, ``bench.perf.cvode``; heyoka's adapter against bare heyoka) and ``cpu_time_s`` at
+  ``--jobs 2`` against ``--jobs 1``.
 
 The summary prints one line per measured figure with its target and ``met``/``missed`` (``info`` where the
 brief sets no target, ``skipped`` with the reason where it could not be measured, e.g. no C compiler). The
@@ -35,7 +35,6 @@ from foucault_bench.bench.perf.measure import ROW_HEADERS, Row, machine_descript
 SECTIONS: dict[str, str] = {
     "loops": "foucault_bench.bench.perf.fixed_step",
     "adapters": "foucault_bench.bench.perf.adapters",
-    "cvode": "foucault_bench.bench.perf.cvode",
     "compile": "foucault_bench.bench.perf.compile_cache",
     "memory": "foucault_bench.bench.perf.memory",
     "sweeps": "foucault_bench.bench.perf.sweeps",

@@ -8,7 +8,7 @@ what remains is the adapter's own work (validation, bookkeeping, silencing the C
 guards of the scipy adapter, the reset of heyoka's reused integrator).
 
 Also reported for CVODE: the time per right-hand-side evaluation of a whole scikit-sundae solve
-(``cvode_*_py``; the compiled ``cvode_*`` are in section ``cvode``), the cost of one call of the numba
+(``cvode_*_py``; the compiled ``cvode_*`` are in section ``limits``), the cost of one call of the numba
 right-hand side from Python, the same solve's cost per evaluation with a plain-Python oscillator
 (scikit-sundae's own per-callback cost), and the effect of the analytic Jacobian (heyoka's symbolic
 derivative compiled by numba, ``Model.numba_jacobian_into``) against CVODE's internal difference quotients.

@@ -1,5 +1,9 @@
 """Section ``limits``: each integrator family against its own limit, and the cost column against the load.
 
+* **CVODE** (``bench.perf.cvode``): the compiled path's CPU time per right-hand-side evaluation on the
+  Panthéon hour at tol 1e-8 (target ≤ 0.6 µs), against the scikit-sundae path with the same steps.
+* **Runge-Kutta pairs** (``bench.perf.erk``): ``dopri5`` / ``scipy_rk45`` and ``dop853`` / ``scipy_dop853`` at
+  equal nfev (target: the compiled pair ≥ 50× cheaper, ratio ≤ 0.02).
 * **heyoka** (``heyoka_limit``): the adapter (``HeyokaTaylor.solve`` as the runner times it, ``monitor=False``)
   against heyoka called directly, one compiled ``taylor_adaptive`` reset before each call, on the Panthéon
   (linear model, 1 h, 668 output points) at tol = 1e-8. Target ≤ 1.05×.
@@ -15,6 +19,8 @@ Timed by the thread's CPU time in interleaved rounds (``bench.perf.measure``), l
 
 from __future__ import annotations
 
+import dataclasses
+import importlib
 import statistics
 import sys
 import tempfile
@@ -93,8 +99,8 @@ def run_with_jobs(matrix: str, jobs: int, db: Path) -> float:
 
 
 def jobs_limit(quick: bool) -> tuple[list[Row], list[list[str]]]:
-    """The matrix at --jobs 1 and --jobs 2: target row for cpu_time_s, info row for wall_time_s, detail lines."""
-    from foucault_bench.bench.run.store import ResultsStore, compare_runs
+    """The matrix at --jobs 1 and --jobs 2 (``compare_jobs``)."""
+    from foucault_bench.bench.run.store import ResultsStore
 
     with tempfile.TemporaryDirectory(prefix="foucault-perf-jobs-") as directory:
         root = Path(directory)
@@ -108,12 +114,19 @@ def jobs_limit(quick: bool) -> tuple[list[Row], list[list[str]]]:
             walls[jobs] = run_with_jobs(str(matrix), jobs, root / f"jobs{jobs}.sqlite")
             with ResultsStore(root / f"jobs{jobs}.sqlite", create=False) as store:
                 frames[jobs] = store.frame()
-    mismatches, costs, _ = compare_runs(frames[1], frames[2])
+    return compare_jobs(frames[1], frames[2], walls, "jobs-check matrix" if quick else "default matrix")
+
+
+def compare_jobs(one, two, walls: dict[int, float], name: str) -> tuple[list[Row], list[list[str]]]:
+    """Target row for cpu_time_s (runs of ``JOBS_MIN_RUN_S`` or more at --jobs 1), info row for wall_time_s,
+    detail lines per integrator, from the stored rows of the same matrix at --jobs 1 (``one``) and 2 (``two``)."""
+    from foucault_bench.bench.run.store import compare_runs
+
+    mismatches, costs, _ = compare_runs(one, two)
     ratios = costs["cpu_time_s_ratio_b_over_a"]
     walls_ratio = costs["wall_time_s_ratio_b_over_a"]
-    long_enough = _cpu_by_run(frames[1], costs) >= JOBS_MIN_RUN_S
+    long_enough = _cpu_by_run(one, costs) >= JOBS_MIN_RUN_S
     selected = ratios[long_enough].dropna()
-    name = "default matrix" if not quick else "jobs-check matrix"
     if selected.empty:
         return [Row(SECTION, "cpu_time_s: --jobs 2 / --jobs 1", None, "×", JOBS_TARGET,
                     f"skipped: no run of {name} took ≥ {JOBS_MIN_RUN_S * 1e3:.0f} ms")], []
@@ -144,10 +157,22 @@ def _cpu_by_run(frame, costs):
     return costs["run"].map(by_run).astype(float)
 
 
+FAMILY_SECTIONS = ("foucault_bench.bench.perf.cvode",)
+"""Modules measuring a family against its limit (each ``run(quick)`` like a section): compiled CVODE per
+right-hand-side evaluation, the compiled Runge-Kutta pairs against scipy's at equal nfev."""
+
+
 def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
     """Every family against its limit; the target rows, a detail table and its headers."""
     headers = ["family", "measurement", "value", "detail"]
+    rows, table = [], []
+    for module in FAMILY_SECTIONS:
+        family_rows, _, _ = importlib.import_module(module).run(quick)
+        for row in family_rows:
+            rows.append(dataclasses.replace(row, section=SECTION))
+            table.append([module.rsplit(".", 1)[-1], row.name, row.cells()[2], row.note])
     row, line = heyoka_limit(quick)
-    rows, table = [row], [line]
+    rows.append(row)
+    table.append(line)
     jobs_rows, jobs_table = jobs_limit(quick)
     return rows + jobs_rows, table + jobs_table, headers
