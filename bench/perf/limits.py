@@ -64,7 +64,7 @@ def heyoka_limit(quick: bool) -> tuple[Row, list[str]]:
     bare = bare_heyoka(problem)
     solution, reference = adapter(), bare()
     assert solution.status == "ok" and solution.y.tobytes() == reference[-1].tobytes(), "adapter and bare differ"
-    times = interleaved({"adapter": adapter, "bare": bare}, 11 if quick else 41)
+    times = interleaved({"adapter": adapter, "bare": bare}, 21 if quick else 61)
     ratio = median_ratio(times["adapter"], times["bare"])
     adapter_ms, bare_ms = (statistics.median(times[name]) * 1e3 for name in ("adapter", "bare"))
     spread = max(times["bare"]) - min(times["bare"])
