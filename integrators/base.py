@@ -120,8 +120,14 @@ class Integrator(ABC):
         order: classical order of accuracy (``None`` where it varies, e.g. variable-order multistep).
         stages: right-hand-side evaluations per step for fixed-step schemes (``None`` for adaptive ones).
         adaptive: ``True`` if driven by a tolerance, ``False`` if by a step size.
-        stability_limit_kh: largest stable k·h on the undamped oscillator ẍ = −k²x (``None`` if unstable
-            for every h or not applicable).
+        stability_limit_kh: largest stable k·h on the undamped oscillator ẍ = −k²x, i.e. without Earth's
+            rotation (``None`` if unstable for every h or not applicable).
+        symplectic: the one-step map is symplectic in the canonical variables (r, p = v + ω×r) of a Hamiltonian
+            model (checked on the linear model by the test suite: Mᵀ J M = J).
+        volume_preserving: the one-step map preserves phase-space volume (det M = 1); implied by ``symplectic``.
+        conserves_quadratic_invariants: every quadratic invariant of the system is an exact invariant of the
+            one-step map (symplectic Runge–Kutta methods; Hairer, Lubich & Wanner, Thm. IV.2.2), e.g. the linear
+            model's energy, kept to round-off.
         reference: where the method is described.
         cost_basis: how the measured cost arises: ``"compiled"`` when the whole integration runs in compiled
             code (no Python call per step or per right-hand-side evaluation), ``"python-driven"`` when a Python
@@ -135,6 +141,9 @@ class Integrator(ABC):
         silence_native_output: ``solve`` redirects the process's stdout and stderr while the integrator runs
             (``quiet_native_output``: a few µs per call), for libraries that print (SUNDIALS); ``False`` for
             one that reports only through return values.
+
+    ``rotation_growth_per_step`` says what rotation does to a method whose ``stability_limit_kh`` holds only
+    without it.
     """
 
     name: ClassVar[str]
@@ -143,10 +152,19 @@ class Integrator(ABC):
     stages: ClassVar[int | None] = None
     adaptive: ClassVar[bool]
     stability_limit_kh: ClassVar[float | None] = None
+    symplectic: ClassVar[bool] = False
+    volume_preserving: ClassVar[bool] = False
+    conserves_quadratic_invariants: ClassVar[bool] = False
     reference: ClassVar[str]
     cost_basis: ClassVar[str | None] = None
     streams_step_metrics: ClassVar[bool] = False
     silence_native_output: ClassVar[bool] = True
+
+    def rotation_growth_per_step(self, kh: float, rate_ratio: float) -> float | None:
+        """Per-step growth factor |λ|max of the amplitude on the linear model turning at the vertical rate
+        a = ``rate_ratio``·k, for a method that is unstable at every h once the frame rotates; ``None`` (the
+        default) where rotation only moves the stability limit by O(a/k)."""
+        return None
 
     def solve(self, problem: Problem, *, step_s: float | None = None, tol: float | None = None,
               monitor: bool = True) -> Solution:
@@ -203,6 +221,10 @@ class Integrator(ABC):
             "stages": self.stages,
             "adaptive": self.adaptive,
             "stability_limit_kh": self.stability_limit_kh,
+            "symplectic": self.symplectic,
+            "volume_preserving": self.volume_preserving or self.symplectic,
+            "conserves_quadratic_invariants": self.conserves_quadratic_invariants,
+            "unstable_with_rotation": self.rotation_growth_per_step(1.0, 1e-4) is not None,
             "reference": self.reference,
             "cost_basis": self.cost_basis,
         }
