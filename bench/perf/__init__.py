@@ -14,8 +14,9 @@ Sections (one module each; each returns target rows and a detail table):
 * ``sweeps``: a latitude sweep with heyoka's batch mode and ensembles against a scalar loop;
 * ``matrices``: wall time of the quick and default matrices, cold and warm (compile once);
 * ``limits``: each integrator family against its own limit (compiled CVODE per right-hand-side evaluation
-  against scikit-sundae's, ``bench.perf.cvode``; heyoka's adapter against bare heyoka) and ``cpu_time_s`` at
-  ``--jobs 2`` against ``--jobs 1``.
+  against scikit-sundae's, ``bench.perf.cvode``; the compiled Runge-Kutta pairs against scipy's at equal
+  nfev, ``bench.perf.erk``; heyoka's adapter against bare heyoka) and ``cpu_time_s`` at ``--jobs 2`` against
+  ``--jobs 1``.
 
 The summary prints one line per measured figure with its target and ``met``/``missed`` (``info`` where the
 brief sets no target, ``skipped`` with the reason where it could not be measured, e.g. no C compiler). The

@@ -157,7 +157,7 @@ def _cpu_by_run(frame, costs):
     return costs["run"].map(by_run).astype(float)
 
 
-FAMILY_SECTIONS = ("foucault_bench.bench.perf.cvode",)
+FAMILY_SECTIONS = ("foucault_bench.bench.perf.cvode", "foucault_bench.bench.perf.erk")
 """Modules measuring a family against its limit (each ``run(quick)`` like a section): compiled CVODE per
 right-hand-side evaluation, the compiled Runge-Kutta pairs against scipy's at equal nfev."""
 
