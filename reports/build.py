@@ -106,14 +106,14 @@ def _overview(builder: _Builder, inputs: ReportInputs) -> None:
 
 def _summary_tables(builder: _Builder, runs: pd.DataFrame) -> None:
     builder.add(Heading("Summary at matched accuracy"), Paragraph(
-        f"For each scene and integrator, the cheapest setting (least median wall time) whose reference error "
+        f"For each scene and integrator, the cheapest setting (least median CPU time) whose reference error "
         f"reaches {tables.MATCHED_ACCURACY_TARGET:g} (max |r − r_ref| / A over the output grid), its cost, or "
         "'not reached'. The counts show every diverged and failed run."))
     builder.table(tables.matched_accuracy(runs), "matched_accuracy",
                   f"Cheapest setting reaching reference error ≤ {tables.MATCHED_ACCURACY_TARGET:g}")
     builder.add(Heading("Shootout"), Paragraph(
-        "Per scene, integrators ranked by their best efficiency 1 / (reference error × wall time) over their "
-        "settings (higher is better; wall time is the median of the timed repeats, compile time excluded). "
+        "Per scene, integrators ranked by their best efficiency 1 / (reference error × CPU time) over their "
+        "settings (higher is better; CPU time is the median of the timed repeats, compile time excluded). "
         "Integrators with no ok run are listed last with their counts."))
     builder.table(tables.shootout(runs), "shootout", "Shootout: efficiency ranking per scene")
 

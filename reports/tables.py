@@ -38,7 +38,7 @@ DERIVED_NOTES: dict[str, str] = {
     "setting": "step as k·h (fixed-step) or tolerance (adaptive)",
     "note": "first diverged/failed message of this scene and integrator",
     "rank": "1 = most efficient in the scene",
-    "efficiency_per_s": "1/s; 1 / (reference_error × wall_time_s), best setting",
+    "efficiency_per_s": "1/s; 1 / (reference_error × cpu_time_s), best setting",
     "declared_order": "classical order the integrator declares (empty: varies)",
     "kind": "fixed-step (fitted) or adaptive (no step size to fit against)",
     "fitted_order": "slope of log(reference_error) against log(step_s) over the ok runs",
@@ -65,7 +65,7 @@ INTEGER_COLUMNS: frozenset[str] = frozenset(
 
 COMPACT_COLUMNS: tuple[str, ...] = (
     "scene", "model", "integrator", "family", "kh", "tol", "status", "reference_error", "energy_max_rel_error",
-    "precession_rate_ref_error", "precession_rate_error", "analytic_gap_exact", "wall_time_s", "nfev", "message",
+    "precession_rate_ref_error", "precession_rate_error", "analytic_gap_exact", "cpu_time_s", "nfev", "message",
 )
 
 
@@ -107,40 +107,40 @@ def matched_accuracy(frame: pd.DataFrame, target: float = MATCHED_ACCURACY_TARGE
         reached = ok[ok["reference_error"] <= target]
         row = {"scene": scene, "integrator": integrator, "family": group["family"].iloc[0]}
         if not reached.empty:
-            best = reached.loc[reached["wall_time_s"].fillna(np.inf).idxmin()]
+            best = reached.loc[reached["cpu_time_s"].fillna(np.inf).idxmin()]
             row.update(outcome="reached", setting=_setting(best), reference_error=best["reference_error"],
-                       wall_time_s=best["wall_time_s"], nfev=best["nfev"])
+                       cpu_time_s=best["cpu_time_s"], nfev=best["nfev"])
         else:
             outcome = "not reached" if not ok.empty else f"no ok run ({', '.join(sorted(set(group['status'])))})"
             row.update(outcome=outcome, setting="", reference_error=ok["reference_error"].min(),
-                       wall_time_s=np.nan, nfev=np.nan)
+                       cpu_time_s=np.nan, nfev=np.nan)
         row.update(_status_counts(group))
         rows.append(row)
-    columns = ["scene", "integrator", "family", "outcome", "setting", "reference_error", "wall_time_s", "nfev",
+    columns = ["scene", "integrator", "family", "outcome", "setting", "reference_error", "cpu_time_s", "nfev",
                "runs", "ok", "diverged", "failed", "note"]
     return pd.DataFrame(rows, columns=columns)
 
 
 def shootout(frame: pd.DataFrame) -> pd.DataFrame:
-    """Per scene, integrators ranked by their best efficiency 1 / (reference_error × wall_time_s)."""
+    """Per scene, integrators ranked by their best efficiency 1 / (reference_error × cpu_time_s)."""
     rows = []
     for (scene, integrator), group in _groups(frame):
         ok = group[group["status"] == STATUS_OK]
-        efficiency = 1.0 / (ok["reference_error"] * ok["wall_time_s"])
+        efficiency = 1.0 / (ok["reference_error"] * ok["cpu_time_s"])
         efficiency = efficiency[np.isfinite(efficiency) & (efficiency > 0)]
         row = {"scene": scene, "integrator": integrator, "family": group["family"].iloc[0]}
         if efficiency.empty:
-            row.update(setting="", reference_error=np.nan, wall_time_s=np.nan, efficiency_per_s=np.nan)
+            row.update(setting="", reference_error=np.nan, cpu_time_s=np.nan, efficiency_per_s=np.nan)
         else:
             best = ok.loc[efficiency.idxmax()]
             row.update(setting=_setting(best), reference_error=best["reference_error"],
-                       wall_time_s=best["wall_time_s"], efficiency_per_s=efficiency.max())
+                       cpu_time_s=best["cpu_time_s"], efficiency_per_s=efficiency.max())
         row.update(_status_counts(group))
         rows.append(row)
     table = pd.DataFrame(rows)
     table["rank"] = table.groupby("scene")["efficiency_per_s"].rank(ascending=False, method="min")
     table = table.sort_values(["scene", "rank", "integrator"], na_position="last")
-    columns = ["scene", "rank", "integrator", "family", "setting", "reference_error", "wall_time_s",
+    columns = ["scene", "rank", "integrator", "family", "setting", "reference_error", "cpu_time_s",
                "efficiency_per_s", "runs", "ok", "diverged", "failed", "note"]
     return table[columns].reset_index(drop=True)
 
