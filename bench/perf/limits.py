@@ -11,8 +11,9 @@
   (``foucault-bench run`` in subprocesses, the user's caches), the stored ``cpu_time_s`` of every run compared
   run by run (``bench.run.store.compare_runs``). Target: every run of ≥ ``JOBS_MIN_RUN_S`` within 15 %, reported
   as the worst max(r, 1/r) of the ratio r = --jobs 2 / --jobs 1 (target ≤ 1.15). ``--quick`` runs
-  ``JOBS_QUICK_MATRIX`` (one scene, one heavy setting per integrator, every run ≥ 10 ms, about a minute
-  both ways); the full section runs the default matrix both ways (about 2 × 3 minutes on 2 idle cores).
+  ``JOBS_QUICK_MATRIX`` (the Panthéon hour, one heavy setting per integrator of the quick matrix, 10 ms or
+  more where the integrator allows; about 40 s both ways); the full section runs the default matrix both ways
+  (about 2 × 5 minutes on 2 idle cores).
 
 Timed by the thread's CPU time in interleaved rounds (``bench.perf.measure``), like the other sections.
 """
