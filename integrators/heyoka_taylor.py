@@ -166,7 +166,7 @@ class HeyokaTaylor(AdaptiveIntegrator):
         integrator = working_integrator(model, self.precision, heyoka_tol, monitor)
         integrator.time = fp_type(0.0)
         integrator.state[:] = np.asarray(problem.initial_state, dtype=fp_type)
-        integrator.pars[:] = np.asarray(problem.parameter_vector[: model.heyoka_parameter_count], dtype=fp_type)
+        integrator.pars[:] = np.asarray(model.heyoka_parameters(problem.parameter_vector), dtype=fp_type)
         if monitor:
             integrator.reset_cooldowns()
             integrator.nt_events[0].callback.rows.clear()

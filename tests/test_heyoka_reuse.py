@@ -26,7 +26,7 @@ def _fresh_copy_run(problem: Problem, monitor: bool) -> tuple[np.ndarray, int, n
     integrator = copy.copy(_compiled_template(problem.model, "double", heyoka_tolerance(problem.params, TOL),
                                               monitor))
     integrator.state[:] = problem.initial_state
-    integrator.pars[:] = problem.parameter_vector[: problem.model.heyoka_parameter_count]
+    integrator.pars[:] = problem.model.heyoka_parameters(problem.parameter_vector)
     *_, steps, _, states = integrator.propagate_grid(problem.t_out)
     rows = np.array(integrator.nt_events[0].callback.rows).reshape(-1, 3) if monitor else None
     return np.asarray(states), steps, rows

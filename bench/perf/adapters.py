@@ -75,7 +75,7 @@ def bare_heyoka(problem) -> Callable[[], Any]:
     import heyoka
 
     model = problem.model
-    pars = problem.parameter_vector[: model.heyoka_parameter_count]
+    pars = model.heyoka_parameters(problem.parameter_vector)
     integrator = heyoka.taylor_adaptive(model.heyoka_system(), problem.initial_state,
                                         tol=heyoka_tolerance(problem.params, TOL), pars=pars)
     grid = problem.t_out
