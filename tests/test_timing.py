@@ -39,3 +39,12 @@ def test_rejected_warm_up_is_not_timed() -> None:
     calls = []
     first, last, timing = time_repeated(lambda: calls.append(1) or "failed", POLICY, accept=lambda r: r == "ok")
     assert timing is None and len(calls) == 1 and first == last == "failed"
+
+
+def test_every_registered_integrator_says_how_its_cost_arises() -> None:
+    from foucault_bench.integrators import REGISTRY
+    from foucault_bench.integrators.base import COST_BASES
+
+    undeclared = {name: integrator.cost_basis for name, integrator in REGISTRY.items()
+                  if integrator.cost_basis not in COST_BASES}
+    assert not undeclared, undeclared
