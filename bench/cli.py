@@ -2,15 +2,19 @@
 
 Each sub-command module provides ``add_arguments(parser)`` and ``main(args) -> int``. Bad input raises
 ``bench.errors.InputError``, which is printed as one line per problem with exit status 2 and no traceback.
+A matrix run stopped by its Dask cluster (``bench.errors.RunInterrupted``) exits with 75, SIGINT with 130,
+SIGTERM during a matrix run with 143, and a closed output pipe ends quietly with 141 (128 + SIGPIPE).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
+import signal
 import sys
 
-from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.errors import InputError, RunInterrupted
 
 COMMANDS: dict[str, tuple[str, str]] = {
     "run": ("foucault_bench.bench.commands.run", "run a benchmark matrix and store one row per run"),
@@ -37,9 +41,16 @@ def main(argv: list[str] | None = None) -> int:
         for problem in error.problems:
             print(f"foucault-bench {args.command}: error: {problem}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
+    except RunInterrupted as error:
+        print(f"foucault-bench {args.command}: interrupted: {error}", file=sys.stderr)
+        return error.exit_status
+    except KeyboardInterrupt as error:  # SIGINT (130), or SIGTERM while a matrix runs (143)
         print("interrupted", file=sys.stderr)
-        return 130
+        return getattr(error, "exit_status", 130)
+    except BrokenPipeError:  # the reader went away (`foucault-bench results | head`): end quietly
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # Python docs, "Note on SIGPIPE": no second error at exit
+        return 128 + signal.SIGPIPE
 
 
 def build_parser_for(argv: list[str]) -> argparse.ArgumentParser:

@@ -9,3 +9,11 @@ class InputError(Exception):
     def __init__(self, problems: list[str] | str):
         self.problems = [problems] if isinstance(problems, str) else list(problems)
         super().__init__("\n".join(self.problems))
+
+
+class RunInterrupted(Exception):
+    """A matrix run stopped for a reason outside any run (its Dask cluster went away): the matrix run is stored
+    as ``interrupted``, the message says why, and ``--resume`` completes it. Exit status 75 (EX_TEMPFAIL,
+    sysexits.h: a temporary failure, try again)."""
+
+    exit_status = 75

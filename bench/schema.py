@@ -32,8 +32,8 @@ COLUMNS: tuple[Column, ...] = (
     Column("duration_s", "REAL", "s", "integrated time span"),
     Column("n_out", "INTEGER", "", "points on the output grid (the same for every integrator of a scene)"),
     # outcome
-    Column("status", "TEXT", "", "ok / diverged / failed"),
-    Column("message", "TEXT", "", "why a run diverged or failed (empty when ok)"),
+    Column("status", "TEXT", "", "ok / diverged / failed / timeout (see RUN_STATUSES)"),
+    Column("message", "TEXT", "", "why a run diverged, failed or timed out (empty when ok)"),
     # verdicts
     Column("energy_conserved", "INTEGER", "", "1 if the model conserves its energy (Jacobi) exactly, else 0"),
     Column("energy_max_rel_error", "REAL", "", "max over the output grid of |E − E₀|/(E₀ − E_rest), E_rest = energy of the bob at rest at the bottom"),
@@ -58,6 +58,11 @@ COLUMNS: tuple[Column, ...] = (
 )
 
 COLUMN_NAMES: tuple[str, ...] = tuple(column.name for column in COLUMNS)
+STATUS_TIMEOUT = "timeout"
+RUN_STATUSES: tuple[str, ...] = ("ok", "diverged", "failed", STATUS_TIMEOUT)
+"""Every value of the ``status`` column: ok; diverged (the state became non-finite; verdicts up to the
+divergence); failed (an error, with the reason in ``message``); timeout (stopped at the per-run time limit,
+``run_timeout_s``, given in ``message``)."""
 VERDICT_COLUMNS: tuple[str, ...] = (
     "energy_max_rel_error",
     "energy_drift_per_s",

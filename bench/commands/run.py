@@ -30,6 +30,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="continue the latest run of the same matrix, skipping the runs already stored")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="run on a Dask distributed cluster (e.g. tcp://127.0.0.1:8786) instead of local workers")
+    parser.add_argument("--run-timeout", type=float, metavar="SECONDS",
+                        help="per-run time limit: a run past it is stopped and stored with status timeout "
+                             "(default: the matrix's [timing] run_timeout_s, else 600 s)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
 
 
@@ -38,11 +41,11 @@ def main(args: argparse.Namespace) -> int:
     if jobs < 1:
         raise InputError(f"--jobs must be at least 1, got {jobs}")
 
-    from foucault_bench.bench.run.matrix import load_matrix
+    from foucault_bench.bench.run.matrix import load_matrix, with_run_timeout
     from foucault_bench.bench.run.runner import make_executor, run_matrix
     from foucault_bench.bench.run.store import ResultsStore, summary_text
 
-    matrix = load_matrix(args.matrix)
+    matrix = with_run_timeout(load_matrix(args.matrix), args.run_timeout)
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{jobs} worker process(es)"
     print(f"matrix {matrix.name!r} ({matrix.source}): {len(matrix.runs)} runs on {len(matrix.scenes)} scene(s), "
           f"{where}, results in {args.db}", file=sys.stderr)

@@ -19,13 +19,20 @@ A matrix file (read with ``tomllib``) looks like this (README "Benchmark matrice
 
     [timing]                              # the timing protocol (bench.run.timing.TimingPolicy)
     min_repeats = 3
+    run_timeout_s = 600                   # per-run time limit (DEFAULT_RUN_TIMEOUT_S); --run-timeout overrides
 
 Step sizes are given as kh = k·h (k = √(g/L)), the quantity the stability limits and error constants are
 written in (PHYSICS.md "Integrators"): the step in seconds is h = kh / k, and the fixed-step loop shortens it
 (never lengthens it) to fit a whole number of steps in each output interval (``integrators.fixed_step``).
 
 ``load_matrix`` refuses a bad file before anything runs and reports every problem at once
-(``bench.errors.InputError``), with a suggestion for misspelt names.
+(``bench.errors.InputError``), with a suggestion for misspelt names. Validation takes time linear in the
+file's size. Settings whose work is absurd are refused with the estimate: more than ``MAX_STEPS`` fixed steps
+(duration·k/kh) in a run, more than ``MAX_OUTPUT_POINTS`` points on a scene's output grid, or a tolerance
+below the double-precision unit roundoff (no double-precision integrator can meet it).
+
+Plug-ins (``plugins``) are Python modules: importing one runs its code. They are imported only once the rest
+of the matrix is valid, and each must register at least one integrator.
 """
 
 from __future__ import annotations
@@ -40,6 +47,7 @@ import json
 import math
 import subprocess
 import tomllib
+from collections import Counter
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -54,7 +62,17 @@ from foucault_bench.bench.run.timing import TimingPolicy
 TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "integrators", "kh", "tol", "override", "plugins",
                   "timing")
 SETTING_KEYS = ("kh", "tol")
-TIMING_KEYS = tuple(field.name for field in dataclasses.fields(TimingPolicy))
+RUN_TIMEOUT_KEY = "run_timeout_s"
+TIMING_KEYS = (*(field.name for field in dataclasses.fields(TimingPolicy)), RUN_TIMEOUT_KEY)
+DEFAULT_RUN_TIMEOUT_S = 600.0
+"""Per-run time limit (s) when neither the matrix nor --run-timeout gives one: well above the slowest run of
+the built-in matrices (bench/README.md, "Nothing is lost", has the measurement)."""
+MAX_STEPS = 1e10
+"""More fixed steps than this in one run is refused (about an hour per run even at 3 ns a step)."""
+MAX_OUTPUT_POINTS = 10**7
+"""More output points per scene than this is refused (each solution holds 4 doubles per point: 320 MB)."""
+UNIT_ROUNDOFF = 2.0**-53
+"""Double-precision unit roundoff u = 2⁻⁵³ (Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed., §2.1)."""
 BUILT_IN_DIRECTORY = Path(__file__).resolve().parents[1] / "matrices"
 PACKAGE_ROOT = Path(__file__).resolve().parents[2]
 NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "bench/problems/scenes.py", "bench/problems/reference.py",
@@ -102,6 +120,7 @@ class Matrix:
     runs: tuple[RunSpec, ...]
     plugins: tuple[str, ...]
     timing: TimingPolicy
+    run_timeout_s: float = DEFAULT_RUN_TIMEOUT_S
 
     @functools.cached_property
     def matrix_hash(self) -> str:
@@ -148,8 +167,60 @@ def _read_matrix_text(name_or_path: str) -> tuple[str, str, str]:
     )
 
 
+def with_run_timeout(matrix: Matrix, run_timeout_s: float | None) -> Matrix:
+    """``matrix`` with its per-run time limit replaced by ``run_timeout_s`` (``--run-timeout``) when given."""
+    if run_timeout_s is None:
+        return matrix
+    message = run_timeout_problem(run_timeout_s, "--run-timeout")
+    if message:
+        raise InputError(message)
+    return dataclasses.replace(matrix, run_timeout_s=float(run_timeout_s))
+
+
+def import_plugins(plugins: tuple[str, ...]) -> None:
+    """Import the plug-in modules (they register integrators when imported)."""
+    for module_name in plugins:
+        importlib.import_module(module_name)
+
+
+def _plugin_problems(plugins: list[str]) -> list[str]:
+    """Import each plug-in module; one message per module that fails to import or registers no integrator."""
+    from foucault_bench.integrators import REGISTRY
+
+    problems = []
+    for module_name in plugins:
+        try:
+            importlib.import_module(module_name)
+        except BaseException as error:  # noqa: BLE001 - a plug-in's failure (even sys.exit) is a problem to report
+            problems.append(f"plugins: cannot import {module_name!r}: {type(error).__name__}: {error}")
+            continue
+        own = [name for name, integrator in REGISTRY.items()
+               if getattr(integrator, "__module__", "") == module_name
+               or getattr(integrator, "__module__", "").startswith(f"{module_name}.")]
+        if not own:
+            problems.append(f"plugins: {module_name!r} registers no integrator (a plug-in module must "
+                            "register at least one with integrators.register)")
+    return problems
+
+
 def parse_matrix(document: dict[str, Any], *, source: str = "matrix", default_name: str = "matrix") -> Matrix:
-    """Validate a parsed matrix document (see the module docstring); raise ``InputError`` with every problem."""
+    """Validate a parsed matrix document (see the module docstring); raise ``InputError`` with every problem.
+
+    Everything but the integrator names is checked first; only if that is clean are the plug-ins imported
+    (importing runs their code) and the integrator names checked against the registry they extend."""
+    plugins = _string_list(document, "plugins", lambda message: None, required=False)
+    first = _validate(document, source, default_name, known_later=bool(plugins))
+    if plugins:
+        problems = [f"{source}: {message}" for message in _plugin_problems(plugins)]
+        if problems:
+            raise InputError(problems)
+        return _validate(document, source, default_name, known_later=False)
+    return first
+
+
+def _validate(document: dict[str, Any], source: str, default_name: str, known_later: bool) -> Matrix:
+    """One pass of ``parse_matrix``; with ``known_later`` unknown integrator names are not reported (a plug-in
+    not imported yet may register them) and nothing that needs them is computed."""
     problems: list[str] = []
 
     def problem(message: str) -> None:
@@ -167,17 +238,13 @@ def parse_matrix(document: dict[str, Any], *, source: str = "matrix", default_na
         problem(f"description must be a string, got {description!r}")
 
     plugins = _string_list(document, "plugins", problem, required=False)
-    for module_name in plugins:
-        try:
-            importlib.import_module(module_name)
-        except Exception as error:  # any import failure of user code is a problem to report, not a crash
-            problem(f"plugins: cannot import {module_name!r}: {type(error).__name__}: {error}")
-
     scenes = _scenes(document, problem)
-    timing = _timing(document.get("timing", {}), problem)
-    runs = _runs(document, scenes, plugins, timing, problem)
+    timing, run_timeout_s = _timing(document.get("timing", {}), problem)
+    runs = _runs(document, scenes, plugins, timing, problem, known_later)
     if problems:
         raise InputError(problems)
+    if known_later:
+        return None  # type: ignore[return-value]  # the second pass builds the matrix
     return Matrix(
         name=name,
         description=description,
@@ -186,6 +253,7 @@ def parse_matrix(document: dict[str, Any], *, source: str = "matrix", default_na
         runs=tuple(runs),
         plugins=tuple(plugins),
         timing=timing,
+        run_timeout_s=run_timeout_s,
     )
 
 
@@ -203,7 +271,7 @@ def _string_list(document: dict[str, Any], key: str, problem, *, required: bool)
     if not isinstance(value, list) or not all(isinstance(item, str) for item in value):
         problem(f"{key} must be a list of strings, got {value!r}")
         return []
-    duplicates = sorted({item for item in value if value.count(item) > 1})
+    duplicates = sorted(item for item, count in Counter(value).items() if count > 1)
     if duplicates:
         problem(f"{key}: listed more than once: {', '.join(duplicates)}")
     return list(dict.fromkeys(value))
@@ -237,25 +305,59 @@ def _scenes(document: dict[str, Any], problem) -> list[Scene]:
     return scenes
 
 
-def _timing(table: Any, problem) -> TimingPolicy:
+def run_timeout_problem(value: Any, where: str) -> str | None:
+    """Why ``value`` is not a usable per-run time limit (a finite number of seconds > 0), or ``None``."""
+    if not _is_real(value) or not math.isfinite(value) or value <= 0:
+        return f"{where} must be a finite number of seconds > 0, got {_short(value)}"
+    return None
+
+
+def _is_real(value: Any) -> bool:
+    """A number a float can hold (not a bool; an int too large for a float, e.g. 10**400, is not one)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        float(value)
+    except OverflowError:
+        return False
+    return True
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:20]}…({len(text)} characters)"
+
+
+def _timing(table: Any, problem) -> tuple[TimingPolicy, float]:
     if not isinstance(table, dict):
         problem(f"timing must be a table, got {table!r}")
-        return TimingPolicy()
+        return TimingPolicy(), DEFAULT_RUN_TIMEOUT_S
     values: dict[str, Any] = {}
     defaults = TimingPolicy()
+    run_timeout_s = DEFAULT_RUN_TIMEOUT_S
     for key, value in table.items():
         if key not in TIMING_KEYS:
             problem(f"timing: unknown key {key!r}{_suggestion(key, TIMING_KEYS)}; allowed keys: {', '.join(TIMING_KEYS)}")
             continue
+        if key == RUN_TIMEOUT_KEY:
+            message = run_timeout_problem(value, f"timing: {key}")
+            if message:
+                problem(message)
+            else:
+                run_timeout_s = float(value)
+            continue
         wanted = type(getattr(defaults, key))
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or (wanted is int and not isinstance(value, int)):
-            problem(f"timing: {key} must be {'an integer' if wanted is int else 'a number'}, got {value!r}")
+        if not _is_real(value) or (wanted is int and not isinstance(value, int)):
+            problem(f"timing: {key} must be {'an integer' if wanted is int else 'a number'}, got {_short(value)}")
+            continue
+        if wanted is float and not math.isfinite(value):
+            problem(f"timing: {key} must be finite, got {value!r}")
             continue
         values[key] = wanted(value)
     policy = TimingPolicy(**values)
     for message in policy.problems():
         problem(message)
-    return policy
+    return policy, run_timeout_s
 
 
 def _sweep(value: Any, key: str, where: str, problem) -> list[float]:
@@ -265,29 +367,36 @@ def _sweep(value: Any, key: str, where: str, problem) -> list[float]:
         return []
     accepted: list[float] = []
     for item in value:
-        if isinstance(item, bool) or not isinstance(item, (int, float)):
-            problem(f"{where}: {key} entries must be numbers, got {item!r}")
+        if not _is_real(item):
+            problem(f"{where}: {key} entries must be numbers a float can hold, got {_short(item)}")
         elif key == "kh" and not (math.isfinite(item) and item > 0):
             problem(f"{where}: step size must be > 0: kh = {item!r} (kh = k·h, the step in units of 1/k)")
         elif key == "tol" and not 0.0 < item < 1.0:
             problem(f"{where}: tolerance must lie in (0, 1): tol = {item!r}")
+        elif key == "tol" and item < UNIT_ROUNDOFF:
+            problem(f"{where}: tol = {item!r} is below the double-precision unit roundoff 2^-53 ≈ 1.1e-16: "
+                    "no double-precision integrator can meet it")
         else:
             accepted.append(float(item))
-    duplicates = sorted({item for item in accepted if accepted.count(item) > 1})
+    duplicates = sorted(item for item, count in Counter(accepted).items() if count > 1)
     if duplicates:
         problem(f"{where}: {key} lists {', '.join(f'{item:g}' for item in duplicates)} more than once")
     return list(dict.fromkeys(accepted))
 
 
 def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timing: TimingPolicy,
-          problem) -> list[RunSpec]:
+          problem, known_later: bool = False) -> list[RunSpec]:
     from foucault_bench.integrators import REGISTRY  # imported here: plugins must be imported first
 
     names = _string_list(document, "integrators", problem, required=True)
+    if "integrators" in document and isinstance(document["integrators"], list) and not document["integrators"]:
+        problem("integrators: the list is empty; name at least one integrator")
     integrators = []
     for name in names:
         if name == REFERENCE_INTEGRATOR:
             problem(f"integrators: {name} computes the references (bench.problems.reference) and is not swept")
+        elif name not in REGISTRY and known_later:
+            continue
         elif name not in REGISTRY:
             problem(f"integrators: unknown integrator {name!r}{_suggestion(name, REGISTRY)}; "
                     f"known integrators: {', '.join(sorted(set(REGISTRY) - {REFERENCE_INTEGRATOR}))}")
@@ -316,9 +425,16 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
 
     for where, sweeps in [("kh", shared), *((f"override.{name}", table) for name, table in own.items())]:
         _check_steps_fit(sweeps.get("kh", []), where, scenes, problem)
+        _check_work(sweeps.get("kh", []), where, scenes, problem)
+    for scene in scenes:
+        if scene.n_intervals + 1 > MAX_OUTPUT_POINTS:
+            problem(f"scene {scene.name!r}: its output grid has {scene.n_intervals + 1:.3g} points, more than "
+                    f"{MAX_OUTPUT_POINTS:.0e} (duration_s / output_interval_s): raise output_interval_s")
 
     used = set()
     runs: list[RunSpec] = []
+    if known_later:
+        return runs
     code = code_version(tuple(plugins))
     for integrator in integrators:
         right, wrong = ("tol", "kh") if integrator.adaptive else ("kh", "tol")
@@ -360,6 +476,17 @@ def _check_steps_fit(kh_values: list[float], where: str, scenes: list[Scene], pr
         if too_coarse:
             problem(f"{where}: kh = {', '.join(f'{value:g}' for value in too_coarse)} exceeds what scene "
                     f"{scene.name!r} allows: a step is at most one output interval, kh <= k·Δ = {largest:.4g}")
+
+
+def _check_work(kh_values: list[float], where: str, scenes: list[Scene], problem) -> None:
+    """Refuse a fixed step that needs more than ``MAX_STEPS`` steps: duration·k/kh in a scene."""
+    for scene in scenes:
+        k = scene.params.pendulum_frequency_rad_s
+        for value in kh_values:
+            steps = scene.duration_s * k / value
+            if steps > MAX_STEPS:
+                problem(f"{where}: kh = {value:g} needs about {steps:.2g} steps in scene {scene.name!r} "
+                        f"(duration {scene.duration_s:g} s · k {k:.4g} rad/s / kh), more than {MAX_STEPS:.0e}")
 
 
 @functools.lru_cache(maxsize=1)

@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.run.lock import MatrixRunLock, MatrixRunLocked
 from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS, VERDICT_COLUMNS
 
 if TYPE_CHECKING:
@@ -118,21 +119,62 @@ class ResultsStore:
 
     Args:
         path: the SQLite file; its directory is created when ``create`` is true.
-        create: create the file and tables if missing; when false a missing file is an ``InputError``.
+        create: create the file and tables if missing (and use SQLite's write-ahead log). When false the file
+            must exist and be a foucault-bench results database (its ``runs`` and ``matrix_runs`` tables), else
+            ``InputError``; it is opened read-only (SQLite URI ``mode=ro``) and nothing in it changes, except
+            through ``write_table`` (a second, writing connection opened on first use).
     """
 
     def __init__(self, path: str | Path = DEFAULT_DB, *, create: bool = True):
         self.path = Path(path)
-        if not create and not self.path.is_file():
-            raise InputError(f"no results database at {self.path} (run `foucault-bench run` first, or give --db)")
-        if create:
+        self.read_only = not create
+        self.locks: dict[str, MatrixRunLock] = {}
+        self._writer: sqlite3.Connection | None = None
+        if not create:
+            self.connection = self._open_existing()
+            return
+        try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise InputError(f"--db {self.path}: cannot create its folder: {error.strerror or error}") from None
+        if self.path.exists() and not self.path.is_file():
+            raise InputError(f"--db {self.path}: exists and is not a file")
         try:
             self.connection = sqlite3.connect(self.path, timeout=30.0)
+            if not self._is_results_database() and self._tables():
+                self.connection.close()
+                raise InputError(f"{self.path}: an SQLite database of something else (tables "
+                                 f"{', '.join(sorted(self._tables())[:5])}); give another --db")
             self.connection.execute("PRAGMA journal_mode=WAL")
             self._create_tables()
         except sqlite3.DatabaseError as error:
             raise InputError(f"{self.path}: not a usable SQLite results database: {error}") from None
+
+    def _open_existing(self) -> sqlite3.Connection:
+        """A read-only connection to an existing results database (see the class docstring)."""
+        if not self.path.is_file():
+            raise InputError(f"no results database at {self.path} (run `foucault-bench run` first, or give --db)")
+        try:
+            self.connection = sqlite3.connect(f"{self.path.resolve().as_uri()}?mode=ro", uri=True, timeout=30.0)
+            if not self._is_results_database():
+                self.connection.close()
+                raise InputError(f"{self.path}: not a foucault-bench results database (no {RUNS_TABLE} and "
+                                 f"{MATRIX_RUNS_TABLE} tables); nothing was changed")
+        except sqlite3.DatabaseError as error:
+            raise InputError(f"{self.path}: not a usable SQLite results database: {error}") from None
+        return self.connection
+
+    def _tables(self) -> set[str]:
+        return {row[0] for row in self.connection.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+
+    def _is_results_database(self) -> bool:
+        """Both tables of the suite are there with their key columns."""
+        tables = self._tables()
+        if not {RUNS_TABLE, MATRIX_RUNS_TABLE} <= tables:
+            return False
+        runs = {row[1] for row in self.connection.execute(f"PRAGMA table_info({RUNS_TABLE})")}
+        matrix_runs = {row[1] for row in self.connection.execute(f"PRAGMA table_info({MATRIX_RUNS_TABLE})")}
+        return {"run_key", "matrix_id", "status"} <= runs and {"matrix_id", "matrix_hash", "status"} <= matrix_runs
 
     def __enter__(self) -> "ResultsStore":
         return self
@@ -141,7 +183,25 @@ class ResultsStore:
         self.close()
 
     def close(self) -> None:
+        for lock in self.locks.values():
+            lock.release()
+        self.locks.clear()
+        if self._writer is not None:
+            self._writer.close()
         self.connection.close()
+
+    def _lock(self, matrix_id: str) -> None:
+        """Hold the matrix run's lock (``bench.run.lock``) until ``finish_matrix_run`` or ``close``; an
+        ``InputError`` if another process holds it."""
+        lock = MatrixRunLock(self.path, matrix_id)
+        try:
+            lock.acquire()
+        except MatrixRunLocked:
+            raise InputError(f"matrix run {matrix_id} in {self.path} is being written by another process "
+                             "(a run or --resume of it is going on); wait for it to end") from None
+        except OSError as error:
+            raise InputError(f"{self.path}: cannot lock matrix run {matrix_id}: {error}") from None
+        self.locks[matrix_id] = lock
 
     def _create_tables(self) -> None:
         runs = ", ".join(f"{column.name} {column.sql_type}" for column in COLUMNS)
@@ -171,7 +231,10 @@ class ResultsStore:
                 (matrix.matrix_hash,),
             ).fetchone()
             if found is not None:
-                matrix_id, resumed = found
+                matrix_id, _ = found
+                self._lock(matrix_id)
+                resumed = self.connection.execute(  # read again under the lock
+                    f"SELECT resumed_utc FROM {MATRIX_RUNS_TABLE} WHERE matrix_id = ?", (matrix_id,)).fetchone()[0]
                 with self.connection:
                     self.connection.execute(
                         f"UPDATE {MATRIX_RUNS_TABLE} SET status = 'running', resumed_utc = ?, jobs = ?, "
@@ -180,6 +243,7 @@ class ResultsStore:
                     )
                 return matrix_id, self.stored_run_keys(matrix_id)
         matrix_id = f"{datetime.now(timezone.utc):%Y%m%d-%H%M%S}-{uuid.uuid4().hex[:6]}"
+        self._lock(matrix_id)
         record = {
             "matrix_id": matrix_id,
             "matrix_name": matrix.name,
@@ -211,6 +275,9 @@ class ResultsStore:
                 f"UPDATE {MATRIX_RUNS_TABLE} SET status = ?, finished_utc = ? WHERE matrix_id = ?",
                 (status, utc_now(), matrix_id),
             )
+        lock = self.locks.pop(matrix_id, None)
+        if lock is not None:
+            lock.release()
 
     def matrix_runs(self) -> pd.DataFrame:
         """Every matrix run (provenance) with its row counts by status, oldest first."""
@@ -282,10 +349,11 @@ class ResultsStore:
         """Store a study table under ``name`` (replacing it, or appending with ``replace=False``)."""
         if not _TABLE_NAME.match(name) or name in RESERVED_TABLES:
             raise ValueError(f"bad table name {name!r}: use letters, digits and _, not one of {RESERVED_TABLES}")
+        writer = self._writing_connection()
         if replace:
-            with self.connection:
-                self.connection.execute(f"DROP TABLE IF EXISTS {name}")
-        self._append_frame(name, frame)
+            with writer:
+                writer.execute(f"DROP TABLE IF EXISTS {name}")
+        self._append_frame(name, frame, writer)
 
     def read_table(self, name: str) -> pd.DataFrame:
         if not _TABLE_NAME.match(name) or not self._table_exists(name):
@@ -306,16 +374,25 @@ class ResultsStore:
         return self.connection.execute(
             "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?", (name,)).fetchone() is not None
 
-    def _append_frame(self, name: str, frame: pd.DataFrame) -> None:
+    def _writing_connection(self) -> sqlite3.Connection:
+        """The connection to write with: the store's own, or for a store opened read-only a second one."""
+        if not self.read_only:
+            return self.connection
+        if self._writer is None:
+            self._writer = sqlite3.connect(self.path, timeout=30.0)
+        return self._writer
+
+    def _append_frame(self, name: str, frame: pd.DataFrame, connection: sqlite3.Connection | None = None) -> None:
         """Append ``frame`` with pandas' ``to_sql``, first adding any column the stored table lacks."""
+        connection = connection or self.connection
         if self._table_exists(name):
-            stored = {row[1] for row in self.connection.execute(f"PRAGMA table_info({name})")}
-            with self.connection:
+            stored = {row[1] for row in connection.execute(f"PRAGMA table_info({name})")}
+            with connection:
                 for column in frame.columns:
                     if column not in stored:
-                        self.connection.execute(f'ALTER TABLE {name} ADD COLUMN "{column}"')
-        with self.connection:
-            frame.to_sql(name, self.connection, if_exists="append", index=False)
+                        connection.execute(f'ALTER TABLE {name} ADD COLUMN "{column}"')
+        with connection:
+            frame.to_sql(name, connection, if_exists="append", index=False)
 
 
 # --- views ----------------------------------------------------------------------------------------------------
