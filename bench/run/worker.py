@@ -48,6 +48,32 @@ _SPAWNER = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_pref
 """Starts every worker: its thread lives as long as the process, which is what PR_SET_PDEATHSIG watches."""
 
 
+def write_message(descriptor: int, value: Any) -> None:
+    """Send ``value`` as one message: its pickle's length (8 bytes, big-endian), then the pickle."""
+    payload = pickle.dumps(value)
+    data = memoryview(len(payload).to_bytes(8, "big") + payload)
+    while data:
+        data = data[os.write(descriptor, data):]
+
+
+def read_message(descriptor: int) -> Any:
+    """The next message (``write_message``); ``EOFError`` if the pipe closes first. Reads exactly one message,
+    so that ``select`` on the descriptor still tells whether another one is waiting."""
+    size = int.from_bytes(_read_exactly(descriptor, 8), "big")
+    return pickle.loads(_read_exactly(descriptor, size))
+
+
+def _read_exactly(descriptor: int, size: int) -> bytes:
+    chunks, left = [], size
+    while left:
+        chunk = os.read(descriptor, min(left, 1 << 20))
+        if not chunk:
+            raise EOFError("the pipe closed")
+        chunks.append(chunk)
+        left -= len(chunk)
+    return b"".join(chunks)
+
+
 def describe(error: BaseException) -> str:
     """``Type: message (file:line)`` of the innermost frame, short enough for a table cell."""
     frames = traceback.extract_tb(error.__traceback__)
@@ -61,8 +87,10 @@ class WorkerProcess:
     def __init__(self) -> None:
         command = [sys.executable, "-m", "foucault_bench.bench.run.worker", str(os.getpid())]
         self.process = _SPAWNER.submit(
-            subprocess.Popen, command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, close_fds=True).result()
+            subprocess.Popen, command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, bufsize=0,
+            close_fds=True).result()
         self.last_used = time.monotonic()
+        self._send(list(sys.path))  # the worker imports the same modules (what multiprocessing's spawn does)
 
     @property
     def pid(self) -> int:
@@ -84,16 +112,15 @@ class WorkerProcess:
 
     def _send(self, value: Any) -> bool:
         try:
-            self.process.stdin.write(pickle.dumps(value))
-            self.process.stdin.flush()
-        except (BrokenPipeError, OSError, ValueError):
+            write_message(self.process.stdin.fileno(), value)
+        except (OSError, ValueError):  # a closed pipe: the worker is gone
             return False
         return True
 
     def receive(self) -> tuple[str, Any] | None:
         """The outcome of the task sent last (blocks until it is complete); ``None`` if the worker died."""
         try:
-            outcome = pickle.load(self.process.stdout)
+            outcome = read_message(self.fileno())
         except Exception:  # end-of-file or a truncated message: the worker died mid-task
             return None
         self.last_used = time.monotonic()
@@ -177,18 +204,17 @@ def main(parent_pid: int) -> None:
     from foucault_bench.bench.run.timing import limit_threads  # standard library only: before numpy
 
     limit_threads()
-    tasks = os.fdopen(os.dup(0), "rb")  # buffered: pickle needs whole reads; one task is in the pipe at a time
-    outcomes = os.fdopen(os.dup(1), "wb")
+    tasks, outcomes = os.dup(0), os.dup(1)
     os.dup2(2, 1)  # stdout writes (plug-ins, native libraries) go to stderr, not into the channel
     devnull = os.open(os.devnull, os.O_RDONLY)
     os.dup2(devnull, 0)
-    sys.path[:] = pickle.load(tasks)  # the parent's (WorkerProcess.__init__)
+    sys.path[:] = read_message(tasks)  # the parent's (WorkerProcess.__init__)
     while True:
         ready, _, _ = select.select([tasks], [], [], IDLE_EXIT_S)
         if not ready:
             return
         try:
-            function, args = pickle.load(tasks)
+            function, args = read_message(tasks)
         except EOFError:
             return
         try:
@@ -196,11 +222,9 @@ def main(parent_pid: int) -> None:
         except BaseException as error:  # noqa: BLE001 - whatever a task raises is its outcome, never the worker's end
             outcome = ("error", describe(error))
         try:
-            message = pickle.dumps(outcome)
+            write_message(outcomes, outcome)
         except BaseException as error:  # noqa: BLE001 - an unpicklable value is the task's fault too
-            message = pickle.dumps(("error", f"the result could not be sent back: {describe(error)}"))
-        outcomes.write(message)
-        outcomes.flush()
+            write_message(outcomes, ("error", f"the result could not be sent back: {describe(error)}"))
 
 
 if __name__ == "__main__":
