@@ -241,7 +241,8 @@ def _field_problems(values: Mapping[str, Any]) -> list[str]:
             continue
         value = values[key]
         if not _is_number(value) or not math.isfinite(value):
-            problems.append(f"{key} must be a finite number ({unit}), got {value!r}")
+            shown = repr(value) if len(repr(value)) <= 40 else f"{repr(value)[:20]}…({len(repr(value))} characters)"
+            problems.append(f"{key} must be a finite number ({unit}), got {shown}")
         elif not in_range(value):
             problems.append(f"{key} must be {condition} ({unit}), got {value!r}")
     length, amplitude = values.get("length_m"), values.get("amplitude_m")
