@@ -228,6 +228,8 @@ def _probe_scheduler(address: str, timeout_s: float) -> Any:
         reply = asyncio.run(bounded())
     except (asyncio.TimeoutError, TimeoutError):
         raise InputError(f"{where}: no Dask scheduler answered within {timeout_s:g} s") from None
+    except ValueError as error:  # an address distributed cannot resolve
+        raise InputError(f"{where}: not a Dask scheduler address: {error}") from None
     except Exception as error:  # refused, reset, garbage: whatever it is, it is not a usable scheduler
         raise InputError(f"{where}: cannot connect to the Dask scheduler: "
                          f"{type(error).__name__}: {str(error).splitlines()[0] if str(error) else ''}") from None
