@@ -42,7 +42,8 @@ def main(args: argparse.Namespace) -> int:
         if args.csv or args.parquet:
             return 0
         runs = store.matrix_runs()[["matrix_id", "matrix_name", "status", "started_utc", "finished_utc",
-                                    "runs_planned", "rows_stored", "ok", "diverged", "failed", "host", "git_commit"]]
+                                    "runs_planned", "rows_stored", "ok", "diverged", "failed", "timeout", "host",
+                                    "git_commit"]]
         with pd.option_context("display.width", 200, "display.max_columns", None):
             print(runs.to_string(index=False, na_rep="–"))
         matrix_id = store.resolve_matrix_id(args.matrix_id)

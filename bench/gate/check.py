@@ -59,7 +59,7 @@ import numpy as np
 import pandas as pd
 
 from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.schema import COLUMN_NAMES, VERDICT_COLUMNS
+from foucault_bench.bench.schema import COLUMN_NAMES, RUN_STATUSES, VERDICT_COLUMNS
 from foucault_bench.bench.run.store import setting_label
 
 if TYPE_CHECKING:  # for annotations only: bench.run.matrix imports the scenes and the integrators
@@ -72,7 +72,7 @@ BOUND_KINDS = ("max", "min", "max_abs", "status", "min_order", "max_ratio")
 UPPER_BOUNDS = ("max", "max_abs", "max_ratio")
 OTHER_KEYS = ("column", "relative_to", "basis")
 BOUND_KEYS = SELECTION_KEYS + BOUND_KINDS + OTHER_KEYS
-STATUSES = ("ok", "diverged", "failed")
+STATUSES = RUN_STATUSES
 
 ERROR_COLUMNS: tuple[str, ...] = tuple(name for name in VERDICT_COLUMNS if name != "energy_drift_per_s")
 """Non-negative error columns: the ones a convergence order can be fitted to."""

@@ -283,7 +283,8 @@ class ResultsStore:
         """Every matrix run (provenance) with its row counts by status, oldest first."""
         return pd.read_sql_query(
             f"SELECT m.*, COUNT(r.run_key) AS rows_stored, "
-            "SUM(r.status = 'ok') AS ok, SUM(r.status = 'diverged') AS diverged, SUM(r.status = 'failed') AS failed "
+            "SUM(r.status = 'ok') AS ok, SUM(r.status = 'diverged') AS diverged, SUM(r.status = 'failed') AS failed, "
+            "SUM(r.status = 'timeout') AS timeout "
             f"FROM {MATRIX_RUNS_TABLE} m LEFT JOIN {RUNS_TABLE} r ON r.matrix_id = m.matrix_id "
             "GROUP BY m.matrix_id ORDER BY m.started_utc, m.rowid",
             self.connection,
@@ -412,6 +413,7 @@ def summarize(frame: pd.DataFrame) -> pd.DataFrame:
             "ok": int((group["status"] == "ok").sum()),
             "diverged": int((group["status"] == "diverged").sum()),
             "failed": int((group["status"] == "failed").sum()),
+            "timeout": int((group["status"] == "timeout").sum()),
             "best_reference_error": None if best is None else best["reference_error"],
             "at": None if best is None else setting_label(best["kh"], best["tol"]),
             "wall_time_s": None if best is None else best["wall_time_s"],
