@@ -162,11 +162,10 @@ def run_isolated(function: Callable, task: tuple, timeout_s: float | None, on_fa
                 worker.kill()
             worker = _THREAD.worker = WorkerProcess()
             kind, version = worker.call(worker_code_version, (plugins,), CODE_CHECK_TIMEOUT_S, stop)
-            if kind != "ok" or version != expected_code:
-                worker.kill()
-                _THREAD.worker = None
-                raise CodeMismatch(f"its worker process has code version {version if kind == 'ok' else kind}, "
-                                   f"the client {expected_code}")
+            worker.code_version = version if kind == "ok" else f"unknown ({kind}: {version})"
+        if worker.code_version != expected_code:
+            raise CodeMismatch(f"its worker process has code version {worker.code_version}, the client "
+                               f"{expected_code}")
         outcome = worker.call(function, task, timeout_s, stop)
         if outcome[0] in ("ok", "error"):
             return _outcome_value(task, outcome, on_failure, timeout_s)

@@ -90,6 +90,7 @@ class WorkerProcess:
             subprocess.Popen, command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, bufsize=0,
             close_fds=True).result()
         self.last_used = time.monotonic()
+        self.code_version: str | None = None  # set by whoever checks it (bench.run.executors.run_isolated)
         self._send(list(sys.path))  # the worker imports the same modules (what multiprocessing's spawn does)
 
     @property
