@@ -6,7 +6,8 @@ task that did not give a result: its worker died twice (``WORKER_DIED``) or it p
 (status ``timeout``). Every task runs in a ``bench.run.worker.WorkerProcess``, so that it can be ended.
 
 ``LocalExecutor``: ``jobs`` worker processes (each single-threaded, ``bench.run.timing.limit_threads``), one
-task each at a time. A worker whose task passes its time limit is killed and replaced; a worker that dies is
+task each at a time, started as soon as the executor is made (their first task, ``warm_up``, imports the
+numerical libraries while the main process validates the matrix). A worker whose task passes its time limit is killed and replaced; a worker that dies is
 replaced and its task retried once in a fresh worker.
 
 ``DaskExecutor``: each Dask task runs its work in a worker process of the Dask worker it lands on
@@ -33,7 +34,7 @@ import uuid
 from typing import Any, Callable, Iterator
 
 from foucault_bench.bench.errors import InputError, RunInterrupted
-from foucault_bench.bench.run.worker import WorkerProcess, IDLE_EXIT_S
+from foucault_bench.bench.run.worker import IDLE_EXIT_S, WorkerProcess, warm_up
 from foucault_bench.bench.schema import STATUS_TIMEOUT
 
 WORKER_DIED = "the worker process died during this run (crash in native code or killed, e.g. out of memory)"
@@ -73,11 +74,21 @@ class LocalExecutor:
         self.jobs = jobs
         self.idle: list[WorkerProcess] = []
         self.busy: dict[WorkerProcess, tuple[tuple, int, float]] = {}
+        self.warming: list[WorkerProcess] = []
+        for _ in range(jobs):  # start now: each imports the numerical libraries while the matrix is validated
+            worker = WorkerProcess()
+            if worker.submit(warm_up, ()):
+                self.warming.append(worker)
 
     def check_code(self, matrix: Any) -> None:
         """Local workers import the same files as this process: nothing to check."""
 
     def _worker(self) -> WorkerProcess:
+        while self.warming:
+            worker = self.warming.pop()
+            if worker.receive() is not None:  # the warm-up's outcome; an import error shows again in the task
+                return worker
+            worker.kill()
         while self.idle:
             worker = self.idle.pop()
             if worker.alive():
@@ -128,6 +139,9 @@ class LocalExecutor:
         for worker in list(self.busy):
             worker.kill()
         self.busy.clear()
+        for worker in self.warming:
+            worker.kill()
+        self.warming.clear()
         for worker in self.idle:
             worker.close()
         self.idle.clear()

@@ -177,12 +177,6 @@ def with_run_timeout(matrix: Matrix, run_timeout_s: float | None) -> Matrix:
     return dataclasses.replace(matrix, run_timeout_s=float(run_timeout_s))
 
 
-def import_plugins(plugins: tuple[str, ...]) -> None:
-    """Import the plug-in modules (they register integrators when imported)."""
-    for module_name in plugins:
-        importlib.import_module(module_name)
-
-
 def _plugin_problems(plugins: list[str]) -> list[str]:
     """Import each plug-in module; one message per module that fails to import or registers no integrator."""
     from foucault_bench.integrators import REGISTRY

@@ -33,36 +33,37 @@ from __future__ import annotations
 
 import collections
 import contextlib
+import importlib
 import math
+import numbers
 import os
 import signal
 import sys
 import threading
 from dataclasses import dataclass
-from typing import Any, Iterator
+from typing import TYPE_CHECKING, Any, Iterator
 
-import numpy as np
 from tqdm import tqdm
 
 from foucault_bench.bench.errors import RunInterrupted
-from foucault_bench.bench.problems.adequacy import model_adequacy
-from foucault_bench.bench.problems.reference import reference_for
-from foucault_bench.bench.problems.scenes import Scene
 from foucault_bench.bench.run.executors import WORKER_DIED, DaskExecutor, LocalExecutor, make_executor
-from foucault_bench.bench.run.matrix import Matrix, RunSpec, import_plugins
-from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.run.timing import limit_threads, peak_rss_mb, time_repeated
 from foucault_bench.bench.run.worker import describe
 from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS, STATUS_TIMEOUT, VERDICT_COLUMNS
-from foucault_bench.bench.verdicts.columns import compute_verdicts
-from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK, Solution, get_integrator
+
+if TYPE_CHECKING:  # the main process imports this module before its workers start: no numerical library here
+    from foucault_bench.bench.problems.scenes import Scene
+    from foucault_bench.bench.run.matrix import Matrix, RunSpec
+    from foucault_bench.bench.run.store import ResultsStore
 
 __all__ = ["WORKER_DIED", "Terminated", "execute_run", "make_executor", "prepare_scene", "run_matrix"]
 
+STATUS_OK, STATUS_DIVERGED, STATUS_FAILED = "ok", "diverged", "failed"  # integrators.base, not imported here
 NOT_DETERMINISTIC = "warning: the output differed between repeated calls (not deterministic)"
 SOLUTION_STATUSES = (STATUS_OK, STATUS_DIVERGED, STATUS_FAILED)
 COUNTERS = ("nfev", "njev", "steps", "rejected_steps")
-_SQL_KINDS = {"TEXT": (str,), "REAL": (int, float), "INTEGER": (int,)}
+_SQL_KINDS = {"TEXT": (str,), "REAL": (numbers.Real,), "INTEGER": (numbers.Integral,)}
+_PLAIN = {"TEXT": str, "REAL": float, "INTEGER": int}
 
 
 class Terminated(KeyboardInterrupt):
@@ -85,8 +86,17 @@ class SceneReady:
     adequacy_error: str | None
 
 
+def import_plugins(plugins: tuple[str, ...]) -> None:
+    """Import the plug-in modules (they register integrators when imported)."""
+    for module_name in plugins:
+        importlib.import_module(module_name)
+
+
 def prepare_scene(scene: Scene, plugins: tuple[str, ...] = ()) -> SceneReady:
     """Compute (or load from the disk cache) the scene's reference and its model-adequacy rows."""
+    from foucault_bench.bench.problems.adequacy import model_adequacy
+    from foucault_bench.bench.problems.reference import reference_for
+
     limit_threads()
     import_plugins(plugins)
     try:
@@ -121,6 +131,10 @@ def check_solution(solution: Any, n_out: int) -> None:
     """Raise ``MalformedResult`` unless ``solution`` is a ``Solution`` the row can be built from: a known
     status, a string message, a finite float state of shape (n_out, 4), counters ``None`` or non-negative
     integers, a step size ``None`` or a positive finite number."""
+    import numpy as np
+
+    from foucault_bench.integrators import Solution
+
     if not isinstance(solution, Solution):
         raise MalformedResult(f"solve returned a {type(solution).__name__}, not a Solution")
     if solution.status not in SOLUTION_STATUSES:
@@ -145,6 +159,10 @@ def check_solution(solution: Any, n_out: int) -> None:
 
 def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
     """Run one matrix entry and return its row (``bench.schema.COLUMNS``). Never raises."""
+    from foucault_bench.bench.problems.reference import reference_for
+    from foucault_bench.bench.verdicts.columns import compute_verdicts
+    from foucault_bench.integrators import Solution, get_integrator
+
     limit_threads()
     row = base_row(spec, matrix_id)
     stage = "setup"
@@ -190,14 +208,19 @@ def checked_row(row: Any, spec: RunSpec, matrix_id: str) -> dict[str, Any]:
     first value that does not: a row that reached the main process is always storable."""
     if not isinstance(row, dict) or set(row) - set(COLUMN_NAMES) or row.get("run_key") != spec.run_key:
         return run_failure(spec, matrix_id, STATUS_FAILED, f"malformed row: {type(row).__name__} {row!r:.80}")
+    plain = {}
     for column in COLUMNS:
         value = row.get(column.name)
-        if isinstance(value, np.generic):
-            value = row[column.name] = value.item()
-        if value is not None and (isinstance(value, bool) or not isinstance(value, _SQL_KINDS[column.sql_type])):
+        try:
+            if value is not None and (isinstance(value, bool) or not isinstance(value, _SQL_KINDS[column.sql_type])):
+                raise TypeError
+            plain[column.name] = None if value is None else _PLAIN[column.sql_type](value)  # numpy scalars too
+            if column.sql_type == "INTEGER" and value is not None and abs(plain[column.name]) >= 2**63:
+                raise OverflowError
+        except (TypeError, ValueError, OverflowError):
             return run_failure(spec, matrix_id, STATUS_FAILED,
                                f"malformed result: {column.name} = {value!r:.80} is not {column.sql_type}")
-    return row
+    return plain
 
 
 def _estimated_cost(spec: RunSpec) -> tuple:

@@ -44,6 +44,15 @@ IDLE_EXIT_S = 600.0
 CLOSE_GRACE_S = 5.0
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
+WORKER_MODULES = (
+    "heyoka",  # the reference integrator's library: imported before any timed call, never counted as compile time
+    "foucault_bench.integrators",
+    "foucault_bench.bench.problems.reference",
+    "foucault_bench.bench.problems.adequacy",
+    "foucault_bench.bench.verdicts.columns",
+)
+"""What a worker imports to run (``warm_up``, its first task, while the main process validates the matrix)."""
+
 _SPAWNER = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="foucault-bench-spawner")
 """Starts every worker: its thread lives as long as the process, which is what PR_SET_PDEATHSIG watches."""
 
@@ -79,6 +88,14 @@ def describe(error: BaseException) -> str:
     frames = traceback.extract_tb(error.__traceback__)
     where = f" ({frames[-1].filename.rsplit('/', 1)[-1]}:{frames[-1].lineno})" if frames else ""
     return f"{type(error).__name__}: {error}{where}"
+
+
+def warm_up() -> None:
+    """Import ``WORKER_MODULES``."""
+    import importlib
+
+    for module_name in WORKER_MODULES:
+        importlib.import_module(module_name)
 
 
 class WorkerProcess:
@@ -213,11 +230,11 @@ def main(parent_pid: int) -> None:
     while True:
         ready, _, _ = select.select([tasks], [], [], IDLE_EXIT_S)
         if not ready:
-            return
+            break
         try:
             function, args = read_message(tasks)
         except EOFError:
-            return
+            break
         try:
             outcome: tuple[str, Any] = ("ok", function(*args))
         except BaseException as error:  # noqa: BLE001 - whatever a task raises is its outcome, never the worker's end
@@ -226,6 +243,10 @@ def main(parent_pid: int) -> None:
             write_message(outcomes, outcome)
         except BaseException as error:  # noqa: BLE001 - an unpicklable value is the task's fault too
             write_message(outcomes, ("error", f"the result could not be sent back: {describe(error)}"))
+    # Every outcome is written: end without tearing down the numerical libraries (0.5-1.2 s per worker,
+    # bench/PERF.md "Start-up"), time the parent would spend waiting for its workers to end.
+    sys.stderr.flush()
+    os._exit(0)
 
 
 if __name__ == "__main__":
