@@ -36,7 +36,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser_for(argv)
     args = parser.parse_args(argv)
     try:
-        return int(_module(args._module).main(args) or 0)
+        status = int(_module(args._module).main(args) or 0)
+        sys.stdout.flush()  # here, so that a closed pipe is reported below and not at exit
+        return status
     except InputError as error:
         for problem in error.problems:
             print(f"foucault-bench {args.command}: error: {problem}", file=sys.stderr)

@@ -357,3 +357,21 @@ def test_a_task_past_its_time_limit_has_its_process_killed():
         executors.run_isolated(sum, ((1, 2),), 30.0, on_failure, "another version", ())
     worker.close()
     assert not worker.alive()
+
+
+def test_a_closed_output_pipe_ends_quietly(tmp_path):
+    matrix = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"],
+                           "kh": [0.2 * 0.999**index for index in range(400)]})
+    database = tmp_path / "many.sqlite"
+    with ResultsStore(database) as store:
+        matrix_id, _ = store.start_matrix_run(matrix, jobs=1, scheduler=None, resume=False)
+        for spec in matrix.runs:
+            store.write_run({"run_key": spec.run_key, "matrix_id": matrix_id, "scene": spec.scene.name,
+                             "integrator": spec.integrator, "kh": spec.kh, "status": "ok", "message": ""})
+        store.finish_matrix_run(matrix_id)
+    process = subprocess.Popen([sys.executable, "-m", "foucault_bench.bench.cli", "results", "--db", str(database),
+                                "--all", "--csv", "/dev/stdout"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert process.stdout.readline().startswith(b"run_key")
+    process.stdout.close()  # like `| head -n 1`
+    assert process.wait(timeout=60) == 128 + signal.SIGPIPE
+    assert b"Traceback" not in process.stderr.read()
