@@ -103,8 +103,9 @@ class Segfaults(_Base):
 
 FAULTY_INTEGRATORS = ("test_hangs", "test_exits", "test_interrupts", "test_list_nfev", "test_wrong_shape",
                       "test_segfaults")
-RUN_TIMEOUT_S = 20.0
-"""Long enough for an rk4 run of seed_2min (well under 1 s, plus a compile-cache load) on a loaded machine."""
+RUN_TIMEOUT_S = 10.0
+"""About 8 times the slowest rk4 or verlet run of seed_2min with a cold compile cache (1.2 s, bench/PERF.md
+"matrices", quick cold)."""
 
 NORMAL = """
 scenes = ["seed_2min"]
