@@ -189,10 +189,10 @@ def test_workers_running_other_code_are_not_used(tmp_path, dask_scheduler, capsy
 SLOWER = """
 scenes = ["seed_2min"]
 integrators = ["rk4", "verlet"]
-kh = [0.2, 0.15, 0.1, 0.07, 0.05, 0.035]
+kh = [4e-5, 3.5e-5, 3e-5, 2.5e-5, 2e-5, 1.5e-5]  # a few million steps: about a second a run with repeats
 [timing]
 min_repeats = 3
-min_total_s = 0.5
+min_total_s = 1.0
 """
 
 
@@ -244,3 +244,40 @@ def test_losing_the_scheduler_interrupts_and_resume_completes(tmp_path):
     assert runs["status"].tolist() == ["finished"] and len(resumed) == len(matrix.runs)
     mismatches, costs, unmatched = compare_runs(local, resumed)
     assert mismatches.empty and not unmatched and len(costs) == len(matrix.runs)
+
+
+def test_losing_every_worker_interrupts(tmp_path, monkeypatch):
+    import threading
+
+    import psutil
+
+    from foucault_bench.bench.errors import RunInterrupted
+
+    monkeypatch.setattr(executors_module, "WORKERS_GONE_S", 3.0)
+    matrix_path = tmp_path / "slower.toml"
+    matrix_path.write_text(textwrap.dedent(SLOWER), encoding="utf-8")
+    matrix = load_matrix(matrix_path)
+    database = tmp_path / "workers.sqlite"
+    address, processes = start_cluster(tmp_path / "cluster", workers=1)
+
+    def kill_the_workers() -> None:
+        deadline = time.monotonic() + 120.0
+        while _rows(database) < 1 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        tree = psutil.Process(processes[1].pid)
+        for process in [*tree.children(recursive=True), tree]:
+            process.kill()
+
+    killer = threading.Thread(target=kill_the_workers, daemon=True)
+    try:
+        executor = executors_module.make_executor(1, address)
+        with ResultsStore(database) as store:
+            killer.start()
+            with pytest.raises(RunInterrupted, match="every usable Dask worker"):
+                run_matrix(matrix, store, executor=executor, progress=False)
+            assert store.matrix_runs()["status"].tolist() == ["interrupted"]
+            rows = store.frame()
+        assert 1 <= len(rows) < len(matrix.runs) and (rows["status"] == "ok").all()
+    finally:
+        killer.join(timeout=130)
+        stop_cluster(processes)

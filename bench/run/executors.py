@@ -314,10 +314,15 @@ class DaskExecutor:
                 time.sleep(0.2)
                 continue
             for future in batch:
-                left -= 1
-                task = futures.pop(future)
+                task = futures[future]
                 if future.status == "finished":
-                    yield task, future.result()
+                    try:
+                        value = future.result(timeout=HEALTH_EVERY_S)
+                    except TimeoutError:  # its result was on a worker that died: Dask computes it again
+                        pending.add(future)
+                        watch.check()
+                        continue
+                    yield task, value
                 elif future.status == "error":
                     error = future.exception()
                     if isinstance(error, CodeMismatch):
@@ -325,8 +330,15 @@ class DaskExecutor:
                     self.lost_runs += 1
                     print(f"note: a run was lost with its Dask worker ({type(error).__name__}: {error}); "
                           "it is not stored", file=sys.stderr)
-                else:  # cancelled or lost: the scheduler connection went away
+                elif future.status == "cancelled":  # the client cancels every future when it loses the scheduler
                     watch.check(lost=True)
+                else:  # lost with its worker: Dask computes it again once a usable worker can take it
+                    pending.add(future)
+                    watch.check()
+                    time.sleep(0.2)
+                    continue
+                left -= 1
+                del futures[future]
                 future.release()
 
     def close(self) -> None:
@@ -351,8 +363,10 @@ class _ClusterWatch:
     def check(self, lost: bool = False) -> None:
         client = self.executor.client
         where = f"the Dask scheduler at {self.executor.scheduler}"
-        if lost or client.status != "running":
+        if client.status != "running":
             raise RunInterrupted(f"lost the connection to {where} (`--resume` continues the matrix)")
+        if lost:
+            raise RunInterrupted(f"{where} cancelled the runs (`--resume` continues the matrix)")
         now = time.monotonic()
         if now - self.last_check < HEALTH_EVERY_S:
             return
