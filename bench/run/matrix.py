@@ -10,6 +10,8 @@ A matrix file (read with ``tomllib``) looks like this (README "Benchmark matrice
     tol = [1e-6, 1e-9]                    # adaptive sweep: tolerance handed to the integrator as ``tol``
     plugins = ["my_package.my_integrator"]  # modules imported first (they register integrators)
 
+    release_azimuth_deg = [0, 45, 90]     # optional: every scene once per release azimuth (scene "NAME-az45")
+
     [scene.lab]                           # an inline scene, read by bench.problems.scenes.scene_from_mapping
     model = "linear"
     ...
@@ -59,8 +61,8 @@ from foucault_bench.bench.problems.scenes import SCENES, Scene, scene_from_mappi
 from foucault_bench.bench.run.store import setting_label
 from foucault_bench.bench.run.timing import TimingPolicy
 
-TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "integrators", "kh", "tol", "override", "plugins",
-                  "timing")
+TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "release_azimuth_deg", "integrators", "kh", "tol",
+                  "override", "plugins", "timing")
 SETTING_KEYS = ("kh", "tol")
 RUN_TIMEOUT_KEY = "run_timeout_s"
 TIMING_KEYS = (*(field.name for field in dataclasses.fields(TimingPolicy)), RUN_TIMEOUT_KEY)
@@ -232,7 +234,7 @@ def _validate(document: dict[str, Any], source: str, default_name: str, known_la
         problem(f"description must be a string, got {description!r}")
 
     plugins = _string_list(document, "plugins", problem, required=False)
-    scenes = _scenes(document, problem)
+    scenes = _release_azimuth_variants(_scenes(document, problem), document.get("release_azimuth_deg"), problem)
     timing, run_timeout_s = _timing(document.get("timing", {}), problem)
     runs = _runs(document, scenes, plugins, timing, problem, known_later)
     if problems:
@@ -320,6 +322,28 @@ def _is_real(value: Any) -> bool:
 def _short(value: Any) -> str:
     text = repr(value)
     return text if len(text) <= 40 else f"{text[:20]}…({len(text)} characters)"
+
+
+def _release_azimuth_variants(scenes: list[Scene], azimuths: Any, problem) -> list[Scene]:
+    """With ``release_azimuth_deg = [ψ₁, ψ₂, …]``, every scene once per release azimuth (degrees from x = South
+    towards y = East), named ``SCENE-azψ``; without it, the scenes as they are."""
+    if azimuths is None:
+        return scenes
+    if (not isinstance(azimuths, list) or not azimuths
+            or not all(_is_real(value) and math.isfinite(value) for value in azimuths)):
+        problem(f"release_azimuth_deg must be a non-empty list of finite numbers (degrees), got {azimuths!r}")
+        return scenes
+    if len(set(azimuths)) != len(azimuths):
+        problem("release_azimuth_deg: an azimuth is listed more than once")
+    return [
+        dataclasses.replace(
+            scene, name=f"{scene.name}-az{azimuth:g}", title=f"{scene.title}, released at azimuth {azimuth:g}°",
+            params=dataclasses.replace(scene.params, release_azimuth_deg=float(azimuth)),
+            assumptions=f"{scene.assumptions} Release azimuth swept by the matrix: {azimuth:g}° from South "
+                        "towards East.".strip(),
+        )
+        for scene in scenes for azimuth in azimuths
+    ]
 
 
 def _timing(table: Any, problem) -> tuple[TimingPolicy, float]:
