@@ -23,6 +23,7 @@ from typing import Callable
 import pandas as pd
 from tqdm import tqdm
 
+from foucault_bench.bench.commands.outputs import creatable
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.schema import COLUMN_NAMES
 from foucault_bench.bench.run.store import DEFAULT_DB, ResultsStore
@@ -286,8 +287,7 @@ def _provenance(store: ResultsStore, matrix_id: str) -> dict[str, str]:
 
 def main(args: argparse.Namespace) -> int:
     started = time.perf_counter()
-    if args.out.exists() and not args.out.is_dir():
-        raise InputError(f"--out {args.out} exists and is not a folder")
+    creatable(args.out, "--out", folder=True)
     with ResultsStore(args.db, create=False) as store:
         matrix_id = store.resolve_matrix_id(args.matrix_id)
         runs = store.frame(matrix_id)

@@ -376,3 +376,41 @@ def test_a_closed_output_pipe_ends_quietly(tmp_path):
     process.stdout.close()  # like `| head -n 1`
     assert process.wait(timeout=60) == 128 + signal.SIGPIPE
     assert b"Traceback" not in process.stderr.read()
+
+
+# --- command options: checked before any work ---------------------------------------------------------------
+
+
+def test_bad_output_paths_and_options_are_refused_before_any_work(tmp_path, capsys):
+    regular = tmp_path / "a_file"
+    regular.write_text("not a folder")
+    missing = tmp_path / "no_such_folder"
+    cases = [
+        (["run", "--matrix", "quick", "--db", str(regular / "x.sqlite")], "--db"),
+        (["run", "--matrix", "quick", "--db", str(tmp_path)], "is a folder"),
+        (["run", "--matrix", "quick", "--run-timeout", "-1"], "--run-timeout must be a finite number"),
+        (["run", "--matrix", "quick", "--run-timeout", "inf"], "--run-timeout must be a finite number"),
+        (["results", "--db", str(tmp_path / "none.sqlite"), "--csv", str(missing / "rows.csv")],
+         f"the folder {missing} does not exist"),
+        (["results", "--db", str(tmp_path / "none.sqlite"), "--parquet", str(regular / "rows.parquet")],
+         "is not a folder"),
+        (["check", "--thresholds", "default", "--junit", str(missing / "junit.xml")],
+         f"the folder {missing} does not exist"),
+        (["report", "--db", str(tmp_path / "none.sqlite"), "--out", str(regular)], "exists and is not a folder"),
+    ]
+    for command, expected in cases:
+        assert cli_main(command) == 2, command
+        err = capsys.readouterr().err
+        assert expected in err and "Traceback" not in err, (command, err)
+        assert len([line for line in err.splitlines() if "error:" in line]) == 1
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["a_file"]  # nothing created
+
+
+def test_more_jobs_than_cores_are_capped_with_a_note(capsys):
+    from foucault_bench.bench.commands.run import default_jobs, jobs_to_use
+
+    assert jobs_to_use(10_000) == default_jobs()
+    assert f"--jobs 10000 is more than the {default_jobs()} core(s) available" in capsys.readouterr().err
+    assert jobs_to_use(1) == 1
+    with pytest.raises(InputError):
+        jobs_to_use(0)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from foucault_bench.bench.commands.outputs import output_file
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.run.store import DEFAULT_DB
 
@@ -29,6 +30,9 @@ def main(args: argparse.Namespace) -> int:
 
     if args.compare and (args.csv or args.parquet or args.all or args.matrix_id):
         raise InputError("--compare takes two matrix ids and no other selection or export option")
+    for option, path in (("--csv", args.csv), ("--parquet", args.parquet)):
+        if path:
+            output_file(path, option)
     with ResultsStore(args.db, create=False) as store:
         if args.compare:
             return _compare(store, *args.compare)

@@ -10,6 +10,7 @@ import os
 import sys
 import time
 
+from foucault_bench.bench.commands.outputs import creatable
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.run.store import DEFAULT_DB
 
@@ -19,13 +20,28 @@ def default_jobs() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
+def jobs_to_use(value: int | None) -> int:
+    """``--jobs``: the cores available when not given; at least 1; more than the cores available is capped to
+    them with a note (runs are single-threaded and CPU-bound: more workers only share the same cores)."""
+    cores = default_jobs()
+    if value is None:
+        return cores
+    if value < 1:
+        raise InputError(f"--jobs must be at least 1, got {value}")
+    if value > cores:
+        print(f"note: --jobs {value} is more than the {cores} core(s) available: using {cores}", file=sys.stderr)
+        return cores
+    return value
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--matrix", default="default",
                         help="a built-in matrix name (default, quick) or a path to a matrix TOML file "
                              "(default: %(default)s)")
     parser.add_argument("--db", default=str(DEFAULT_DB), help="results database (SQLite; default: %(default)s)")
     parser.add_argument("--jobs", type=int, default=None,
-                        help="worker processes, one single-threaded worker per core (default: the cores available)")
+                        help="worker processes, one single-threaded worker per core (default, and at most: the "
+                             "cores available)")
     parser.add_argument("--resume", action="store_true",
                         help="continue the latest run of the same matrix, skipping the runs already stored")
     parser.add_argument("--scheduler", metavar="ADDRESS",
@@ -37,9 +53,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    jobs = default_jobs() if args.jobs is None else args.jobs
-    if jobs < 1:
-        raise InputError(f"--jobs must be at least 1, got {jobs}")
+    creatable(args.db, "--db", folder=False)
+    jobs = jobs_to_use(args.jobs)
 
     from foucault_bench.bench.run.matrix import load_matrix, with_run_timeout
     from foucault_bench.bench.run.runner import make_executor, run_matrix

@@ -691,10 +691,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--format", choices=("text", "markdown"), default="text",
                         help="table format on stdout (markdown for CI job summaries; default: %(default)s)")
     parser.add_argument("--junit", metavar="FILE", help="also write the checks as JUnit XML")
+    parser.add_argument("--run-timeout", type=float, metavar="SECONDS",
+                        help="per-run time limit when running a matrix (default: the matrix's [timing] "
+                             "run_timeout_s, else 600 s)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars while running a matrix")
 
 
 def main(args: argparse.Namespace) -> int:
+    from foucault_bench.bench.commands.outputs import creatable, output_file
+
+    if args.junit:
+        output_file(args.junit, "--junit")
+    if args.db:
+        creatable(args.db, "--db", folder=False)
+    if args.run_timeout is not None and args.results:
+        raise InputError("--run-timeout applies to a matrix run: not with --results")
     thresholds = load_thresholds(args.thresholds)
     if args.matrix_id and not args.results:
         raise InputError("--matrix-id selects a stored run: give it with --results")
@@ -712,7 +723,7 @@ def main(args: argparse.Namespace) -> int:
         if matrix_name is None:
             raise InputError(f"{thresholds.source} names no matrix: give --results DB or --matrix FILE")
         frame, what = run_for_check(thresholds, matrix_name, db=args.db, jobs=args.jobs,
-                                    progress=not args.no_progress)
+                                    progress=not args.no_progress, run_timeout_s=args.run_timeout)
     validate_against(thresholds, frame, what=what)
     outcomes = evaluate(thresholds, frame)
     print(f"checking {thresholds.source} against {what}", file=sys.stderr)
@@ -724,18 +735,16 @@ def main(args: argparse.Namespace) -> int:
 
 
 def run_for_check(thresholds: Thresholds, matrix_name: str, *, db: str | None, jobs: int | None,
-                  progress: bool) -> tuple[pd.DataFrame, str]:
+                  progress: bool, run_timeout_s: float | None = None) -> tuple[pd.DataFrame, str]:
     """Validate ``thresholds`` against the planned runs of the matrix (before anything runs), run the matrix
     into ``db`` (a temporary database when ``None``) and return its rows and a description of them."""
-    from foucault_bench.bench.commands.run import default_jobs
-    from foucault_bench.bench.run.matrix import load_matrix
+    from foucault_bench.bench.commands.run import jobs_to_use
+    from foucault_bench.bench.run.matrix import load_matrix, with_run_timeout
     from foucault_bench.bench.run.runner import run_matrix
     from foucault_bench.bench.run.store import ResultsStore
 
-    matrix = load_matrix(matrix_name)
-    jobs = default_jobs() if jobs is None else jobs
-    if jobs < 1:
-        raise InputError(f"--jobs must be at least 1, got {jobs}")
+    matrix = with_run_timeout(load_matrix(matrix_name), run_timeout_s)
+    jobs = jobs_to_use(jobs)
     validate_against(thresholds, planned_rows(matrix), what=f"matrix {matrix.name!r}")
     with tempfile.TemporaryDirectory(prefix="foucault-check-") as scratch:
         path = db or str(Path(scratch) / "check.sqlite")
