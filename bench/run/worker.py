@@ -40,7 +40,7 @@ import traceback
 from typing import Any, Callable
 
 PARENT_POLL_S = 0.5
-IDLE_EXIT_S = 600.0
+IDLE_EXIT_S = 60.0
 CLOSE_GRACE_S = 5.0
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
