@@ -272,7 +272,7 @@ def test_read_only_commands_refuse_a_foreign_database_and_change_nothing(tmp_pat
 SLOW = """
 scenes = ["seed_2min"]
 integrators = ["rk4", "verlet"]
-kh = [0.2, 0.15, 0.1, 0.07, 0.05, 0.035, 0.025, 0.018, 0.0125, 0.009, 0.006, 0.004]
+kh = [5e-5, 4.5e-5, 4e-5, 3.5e-5, 3e-5, 2.5e-5, 2e-5, 1.5e-5]  # a few million steps: about 1 s a run with repeats
 [timing]
 min_repeats = 3
 min_total_s = 1.0
@@ -314,7 +314,7 @@ def _none_survive(processes: list, within_s: float = 10.0) -> list:
     return alive
 
 
-def test_sigterm_interrupts_kill_leaves_no_process_and_a_second_writer_is_refused(tmp_path, capsys):
+def test_signals_and_kills_leave_no_process_and_a_second_writer_is_refused(tmp_path, capsys):
     matrix_path = write(tmp_path / "slow.toml", SLOW)
     database = tmp_path / "slow.sqlite"
     process = _start(matrix_path, database)
@@ -335,6 +335,16 @@ def test_sigterm_interrupts_kill_leaves_no_process_and_a_second_writer_is_refuse
         children = _workers_started(process, 2, database)
         process.send_signal(signal.SIGKILL)
         process.wait(timeout=30)
+        assert not _none_survive(children)
+    finally:
+        process.kill()
+    process = _start(matrix_path, database, "--resume")
+    try:
+        children = _workers_started(process, 2, database)
+        process.send_signal(signal.SIGINT)
+        time.sleep(0.01)
+        process.send_signal(signal.SIGINT)  # while the first is being handled: everything ends at once
+        assert process.wait(timeout=30) == 130
         assert not _none_survive(children)
     finally:
         process.kill()

@@ -27,6 +27,8 @@ from __future__ import annotations
 import asyncio
 import collections
 import multiprocessing.connection
+import os
+import signal
 import sys
 import threading
 import time
@@ -133,6 +135,14 @@ class LocalExecutor:
     def close(self) -> None:
         """Let idle workers exit; kill any still busy."""
         self.kill()
+
+    def kill_now(self) -> None:
+        """SIGKILL to every worker, nothing else: safe in a signal handler that interrupted ``kill``."""
+        for worker in [*self.busy, *self.idle, *self.warming]:
+            try:
+                os.kill(worker.pid, signal.SIGKILL)
+            except OSError:
+                pass
 
     def kill(self) -> None:
         """End every worker now (SIGKILL to busy ones, end-of-file to idle ones)."""
@@ -343,6 +353,9 @@ class DaskExecutor:
 
     def close(self) -> None:
         self.client.close(timeout=DASK_CONNECT_TIMEOUT_S)
+
+    def kill_now(self) -> None:
+        """Nothing to do before the process exits: the scheduler forgets the runs of a client that is gone."""
 
     def kill(self) -> None:
         try:

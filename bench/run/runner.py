@@ -255,7 +255,7 @@ def _stop_on_signals(executor: LocalExecutor | DaskExecutor) -> Iterator[None]:
         return
 
     def at_once(signum: int, frame: Any) -> None:
-        executor.kill()
+        executor.kill_now()
         os._exit(128 + signum)
 
     def first(signum: int, frame: Any) -> None:
