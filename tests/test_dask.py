@@ -144,7 +144,7 @@ def test_a_silent_service_or_tls_without_settings_is_refused_in_bounded_time(tmp
         silent.bind(("127.0.0.1", 0))
         silent.listen()
         port = silent.getsockname()[1]
-        for address, expected in [(f"tcp://127.0.0.1:{port}", "no Dask scheduler answered within 2 s"),
+        for address, expected in [(f"tcp://127.0.0.1:{port}", "cannot connect to the Dask scheduler: no answer within 2 s"),
                                   (f"tls://127.0.0.1:{port}", "needs TLS settings"),
                                   ("tcp://nonsense:::x", "not a Dask scheduler address")]:
             started = time.monotonic()

@@ -250,7 +250,7 @@ def _probe_scheduler(address: str, timeout_s: float) -> Any:
     try:
         reply = asyncio.run(bounded())
     except (asyncio.TimeoutError, TimeoutError):
-        raise InputError(f"{where}: no Dask scheduler answered within {timeout_s:g} s") from None
+        raise InputError(f"{where}: cannot connect to the Dask scheduler: no answer within {timeout_s:g} s") from None
     except ValueError as error:  # an address distributed cannot resolve
         raise InputError(f"{where}: not a Dask scheduler address: {error}") from None
     except Exception as error:  # refused, reset, garbage: whatever it is, it is not a usable scheduler
