@@ -20,6 +20,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "run": ("foucault_bench.bench.commands.run", "run a benchmark matrix and store one row per run"),
     "results": ("foucault_bench.bench.commands.results", "list, export and compare stored runs"),
     "check": ("foucault_bench.bench.gate.check", "check stored or fresh results against a thresholds file (CI gate)"),
+    "selftest": ("foucault_bench.bench.commands.selftest", "check an integrator (built-in or plug-in) against its declared facts"),
     "perf": ("foucault_bench.bench.perf", "measure the suite's own speed against C loops and bare libraries"),
     "report": ("foucault_bench.reports.build", "build the HTML/Markdown report from a results database"),
     "seed": ("foucault_bench.reports.seed", "reproduce and correct the seed note's figures"),

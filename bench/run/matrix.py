@@ -526,18 +526,22 @@ def git_commit() -> str | None:
 @functools.lru_cache(maxsize=None)
 def code_version(plugins: tuple[str, ...] = ()) -> str:
     """SHA-256 (16 hex digits) of the package version and of every source file that determines a row's
-    numbers (``NUMBER_SOURCES``, plus the plug-in modules' files): a stored row is reused by ``--resume`` only
-    when none of them changed, committed or not."""
+    numbers (``NUMBER_SOURCES``, the matrix's plug-in modules and the entry-point plug-ins loaded by
+    ``foucault_bench.integrators``; a plug-in package with all its modules): a stored row is reused by
+    ``--resume`` only when none of them changed, committed or not."""
+    from foucault_bench.integrators.registry import ENTRY_POINT_MODULES
+
     try:
         package = version("foucault-bench")
     except PackageNotFoundError:
         package = "unknown"
     digest = hashlib.sha256(package.encode())
     paths = sorted({path for pattern in NUMBER_SOURCES for path in PACKAGE_ROOT.glob(pattern)})
-    for module_name in plugins:
+    for module_name in (*plugins, *ENTRY_POINT_MODULES):
         spec = importlib.util.find_spec(module_name)
         if spec is not None and spec.origin and spec.origin not in ("built-in", "frozen"):
-            paths.append(Path(spec.origin))
+            origin = Path(spec.origin)
+            paths += sorted(origin.parent.rglob("*.py")) if spec.submodule_search_locations else [origin]
     for path in paths:
         digest.update(path.name.encode())
         digest.update(path.read_bytes())
