@@ -104,8 +104,8 @@ class Segfaults(_Base):
 FAULTY_INTEGRATORS = ("test_hangs", "test_exits", "test_interrupts", "test_list_nfev", "test_wrong_shape",
                       "test_segfaults")
 RUN_TIMEOUT_S = 10.0
-"""About 8 times the slowest rk4 or verlet run of seed_2min with a cold compile cache (1.2 s, bench/PERF.md
-"matrices", quick cold)."""
+"""About 8 times the slowest rk4 or verlet run of seed_2min (1.2 s with a cold compile cache, bench/PERF.md
+"matrices", quick cold); the test runs the clean matrix first, so that the faulty one loads compiled code."""
 
 NORMAL = """
 scenes = ["seed_2min"]
@@ -155,13 +155,13 @@ def test_faulty_plugins_become_rows_and_normal_rows_are_unchanged(tmp_path, faul
     clean_matrix = write(tmp_path / "clean.toml", NORMAL)
     matrix = load_matrix(faulty_matrix)
     assert matrix.run_timeout_s == RUN_TIMEOUT_S
+    with ResultsStore(tmp_path / "clean.sqlite") as store:  # first: fills the compile cache the limit excludes
+        run_matrix(load_matrix(clean_matrix), store, jobs=2, progress=False)
+        clean = store.frame()
     with ResultsStore(tmp_path / "faulty.sqlite") as store:
         run_matrix(matrix, store, jobs=2, progress=False)
         faulty = store.frame()
         provenance = store.matrix_runs().iloc[-1]
-    with ResultsStore(tmp_path / "clean.sqlite") as store:
-        run_matrix(load_matrix(clean_matrix), store, jobs=2, progress=False)
-        clean = store.frame()
     assert provenance["status"] == "finished" and len(faulty) == len(matrix.runs) == 10
     rows = faulty.set_index("integrator")
     assert rows.loc["test_hangs", "status"] == "timeout"
@@ -286,12 +286,13 @@ def _start(matrix_path: Path, database: Path, *extra: str) -> subprocess.Popen:
 
 
 def _workers_started(process: subprocess.Popen, count: int, database: Path, deadline_s: float = 120.0) -> list:
-    """The process's descendants once it has ``count`` of them and the matrix run is stored."""
+    """The process's descendants once it has ``count`` of them and has stored a row (its matrix run is going)."""
     parent = psutil.Process(process.pid)
     deadline = time.monotonic() + deadline_s
+    rows_before = _stored_rows(database)
     while time.monotonic() < deadline and process.poll() is None:
         children = parent.children(recursive=True)
-        if len(children) >= count and _stored_rows(database) >= 1:
+        if len(children) >= count and _stored_rows(database) > rows_before:
             return children
         time.sleep(0.1)
     raise AssertionError(f"the matrix run did not start its workers: {process.stderr.read().decode()[-2000:]}")
