@@ -22,6 +22,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "check": ("foucault_bench.bench.gate.check", "check stored or fresh results against a thresholds file (CI gate)"),
     "selftest": ("foucault_bench.bench.commands.selftest", "check an integrator (built-in or plug-in) against its declared facts"),
     "perf": ("foucault_bench.bench.perf", "measure the suite's own speed against C loops and bare libraries"),
+    "advise": ("foucault_bench.bench.commands.advise", "the cheapest integrator and setting for a scene and a target error"),
     "report": ("foucault_bench.reports.build", "build the HTML/Markdown report from a results database"),
     "seed": ("foucault_bench.reports.seed", "reproduce and correct the seed note's figures"),
     "simulate": ("foucault_bench.reports.simulate", "interactive simulation (or --save an animation)"),

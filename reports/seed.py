@@ -21,6 +21,7 @@ from matplotlib.figure import Figure as MplFigure
 from foucault_bench.bench.errors import InputError
 from foucault_bench.reports.studies import SeedStudy, seed_revisited
 from foucault_bench.reports.charts import integrator_style, save
+from foucault_bench.reports.interactive import drawn_points, from_matplotlib
 from foucault_bench.reports.document import Block, Figure, Heading, Paragraph, write_document
 
 DEFAULT_OUT = Path("results") / "seed"
@@ -33,7 +34,7 @@ def _seed_colour() -> str:
     return integrator_style("explicit_euler", "euler")["color"]
 
 
-def _trajectory(study: SeedStudy, stem: Path) -> Path:
+def _trajectory(study: SeedStudy) -> MplFigure:
     s = study.series
     figure = MplFigure(figsize=(15, 4.6), layout="constrained")
     seed_axes, corrected_axes, gap_axes = figure.subplots(1, 3)
@@ -61,10 +62,10 @@ def _trajectory(study: SeedStudy, stem: Path) -> Path:
     gap_axes.set_title("What the approximation and the 24 h day miss")
     gap_axes.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncols=1)
     gap_axes.grid(True, alpha=0.3)
-    return save(figure, stem)
+    return figure
 
 
-def _euler(study: SeedStudy, stem: Path) -> Path:
+def _euler(study: SeedStudy) -> MplFigure:
     s = study.series
     figure = MplFigure(figsize=(15, 4.6), layout="constrained")
     seed_axes, corrected_axes, amplitude_axes = figure.subplots(1, 3)
@@ -91,7 +92,7 @@ def _euler(study: SeedStudy, stem: Path) -> Path:
     amplitude_axes.set_title("The swing widens under explicit Euler")
     amplitude_axes.legend(fontsize=8, loc="upper left")
     amplitude_axes.grid(True, alpha=0.3)
-    return save(figure, stem)
+    return figure
 
 
 def _plot_running_max(axes, series, curves) -> None:
@@ -105,7 +106,7 @@ def _plot_running_max(axes, series, curves) -> None:
     axes.set_yscale("log")
 
 
-def _energy(study: SeedStudy, stem: Path) -> Path:
+def _energy(study: SeedStudy) -> MplFigure:
     s = study.series
     t = s["t_s"]
     figure = MplFigure(figsize=(14, 4.8), layout="constrained")
@@ -129,10 +130,10 @@ def _energy(study: SeedStudy, stem: Path) -> Path:
     for axes in (seed_axes, corrected_axes):
         axes.set_xlabel("time t (s)")
         axes.grid(True, alpha=0.3)
-    return save(figure, stem)
+    return figure
 
 
-def _difference(study: SeedStudy, stem: Path) -> Path:
+def _difference(study: SeedStudy) -> MplFigure:
     s = study.series
     t = s["t_s"]
     figure = MplFigure(figsize=(14, 4.8), layout="constrained")
@@ -156,7 +157,7 @@ def _difference(study: SeedStudy, stem: Path) -> Path:
     for axes in (seed_axes, corrected_axes):
         axes.set_xlabel("time t (s)")
         axes.grid(True, alpha=0.3)
-    return save(figure, stem)
+    return figure
 
 
 def _findings(study: SeedStudy) -> dict[str, str]:
@@ -246,8 +247,11 @@ def seed_blocks(folder: Path, prefix: str) -> list[Block]:
         ("energy", _energy, "Relative energy error of the Euler solution, and of sound schemes and the model itself."),
         ("difference", _difference, "Numeric minus analytic, and what it is made of."),
     ):
-        draw(study, folder / prefix / f"seed_{name}")
-        blocks += [Figure(f"{prefix}/seed_{name}", caption), Paragraph(findings[name])]
+        figure = draw(study)
+        save(figure, folder / prefix / f"seed_{name}")
+        plot = from_matplotlib(figure)
+        blocks += [Figure(f"{prefix}/seed_{name}", caption, plot.to_json(), drawn_points(plot)),
+                   Paragraph(findings[name])]
     blocks += [Heading("The centrifugal term", level=3), Paragraph(findings["centrifugal"])]
     return blocks
 
