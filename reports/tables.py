@@ -27,7 +27,7 @@ from foucault_bench.bench.problems.scenes import Scene
 from foucault_bench.bench.verdicts import pareto
 from foucault_bench.bench.verdicts.convergence import observed_order
 from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS, cheapest_meeting, cost_column
-from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
+from foucault_bench.integrators import STATUS_DIVERGED, STATUS_OK
 from foucault_bench.integrators.registry import REGISTRY
 
 MATCHED_ACCURACY_TARGET = 1e-6
