@@ -1,7 +1,7 @@
-"""The ``foucault-bench`` command line: one sub-command per module, imported only when used.
+"""The ``foucault-bench`` command line: one sub-command per module of ``bench.commands``, imported only when used.
 
-Each sub-command module provides ``add_arguments(parser)`` and ``main(args) -> int``. Bad input raises
-``bench.errors.InputError``, which is printed as one line per problem with exit status 2 and no traceback.
+Each command module provides ``add_arguments(parser)`` and ``main(args) -> int`` (``bench.commands``). Bad input
+raises ``bench.errors.InputError``, which is printed as one line per problem with exit status 2 and no traceback.
 """
 
 from __future__ import annotations
@@ -10,21 +10,12 @@ import argparse
 import importlib
 import sys
 
+from foucault_bench.bench.commands import COMMANDS
 from foucault_bench.bench.errors import InputError
 
-COMMANDS: dict[str, tuple[str, str]] = {
-    "run": ("foucault_bench.bench.commands.run", "run a benchmark matrix and store one row per run"),
-    "results": ("foucault_bench.bench.commands.results", "list, export and compare stored runs"),
-    "check": ("foucault_bench.bench.gate.check", "check stored or fresh results against a thresholds file (CI gate)"),
-    "perf": ("foucault_bench.bench.perf", "measure the suite's own speed against C loops and bare libraries"),
-    "report": ("foucault_bench.reports.build", "build the HTML/Markdown report from a results database"),
-    "seed": ("foucault_bench.reports.seed", "reproduce and correct the seed note's figures"),
-    "simulate": ("foucault_bench.reports.simulate", "interactive simulation (or --save an animation)"),
-}
 
-
-def _module(module_name: str):
-    return importlib.import_module(module_name)
+def _module(name: str):
+    return importlib.import_module(f"foucault_bench.bench.commands.{COMMANDS[name][0]}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -32,7 +23,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser_for(argv)
     args = parser.parse_args(argv)
     try:
-        return int(_module(args._module).main(args) or 0)
+        return int(_module(args.command).main(args) or 0)
     except InputError as error:
         for problem in error.problems:
             print(f"foucault-bench {args.command}: error: {problem}", file=sys.stderr)
@@ -43,7 +34,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def build_parser_for(argv: list[str]) -> argparse.ArgumentParser:
-    """The parser with only the chosen sub-command's arguments loaded (all of them for a top-level --help)."""
+    """The parser with only the chosen sub-command's arguments loaded."""
     parser = argparse.ArgumentParser(
         prog="foucault-bench",
         description="Verification and benchmark suite for ODE integrators on the Foucault pendulum. "
@@ -52,11 +43,10 @@ def build_parser_for(argv: list[str]) -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     chosen = argv[0] if argv else None
-    for name, (module_name, help_text) in COMMANDS.items():
+    for name, (_, help_text) in COMMANDS.items():
         command_parser = sub.add_parser(name, help=help_text, description=help_text)
-        command_parser.set_defaults(_module=module_name)
         if name == chosen:
-            _module(module_name).add_arguments(command_parser)
+            _module(name).add_arguments(command_parser)
     return parser
 
 

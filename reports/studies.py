@@ -28,7 +28,8 @@ import pandas as pd
 from tqdm import tqdm
 
 from foucault_bench.bench.problems.scenes import SEED_EARTH_RATE_RAD_S
-from foucault_bench.bench.run.store import ResultsStore, setting_label
+from foucault_bench.bench.run.store import ResultsStore
+from foucault_bench.bench.schema import setting_label
 from foucault_bench.bench.verdicts.columns import energy_scale, energy_verdicts
 from foucault_bench.bench.verdicts.turning_points import precession_rate
 from foucault_bench.integrators import STATUS_OK, Problem, Solution, get_integrator

@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS
-from foucault_bench.bench.run.store import setting_label
+from foucault_bench.bench.schema import setting_label
 from foucault_bench.bench.verdicts.convergence import observed_order
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
 from foucault_bench.integrators.registry import REGISTRY

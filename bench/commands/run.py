@@ -1,22 +1,17 @@
 """``foucault-bench run``: run a benchmark matrix and store one row per run (bench.run.runner, bench.run.store).
 
-The matrix is validated completely before anything runs; every problem is reported (exit status 2).
+The matrix is validated completely before anything runs; every problem is reported (exit status 2). The
+worker processes start before the matrix is read, so that their imports overlap with the validation.
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 
-from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.run.store import DEFAULT_DB
-
-
-def default_jobs() -> int:
-    """The cores this process may use (its CPU affinity where the platform has one)."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+from foucault_bench.bench.commands import options
+from foucault_bench.bench.run.store import DEFAULT_DB  # the store module imports no numerical library
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -29,25 +24,30 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--resume", action="store_true",
                         help="continue the latest run of the same matrix, skipping the runs already stored")
     parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help="run on a Dask distributed cluster (e.g. tcp://127.0.0.1:8786) instead of local workers")
+                        help="run on a Dask distributed cluster (e.g. tcp://127.0.0.1:8786) instead of local workers "
+                             "(needs the 'dask' extra)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
 
 
 def main(args: argparse.Namespace) -> int:
-    jobs = default_jobs() if args.jobs is None else args.jobs
-    if jobs < 1:
-        raise InputError(f"--jobs must be at least 1, got {jobs}")
+    jobs = options.jobs(args.jobs)
+    started = time.perf_counter()
 
-    from foucault_bench.bench.run.matrix import load_matrix
-    from foucault_bench.bench.run.runner import make_executor, run_matrix
-    from foucault_bench.bench.run.store import ResultsStore, summary_text
+    from foucault_bench.bench.run.runner import make_executor
 
-    matrix = load_matrix(args.matrix)
+    executor = make_executor(jobs, args.scheduler)  # first: workers start while the matrix is validated,
+    try:                                            # and a bad address changes nothing
+        from foucault_bench.bench.run.matrix import load_matrix
+        from foucault_bench.bench.run.runner import run_matrix
+        from foucault_bench.bench.run.store import ResultsStore, summary_text
+
+        matrix = load_matrix(args.matrix)
+    except BaseException:
+        executor.close()
+        raise
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{jobs} worker process(es)"
     print(f"matrix {matrix.name!r} ({matrix.source}): {len(matrix.runs)} runs on {len(matrix.scenes)} scene(s), "
           f"{where}, results in {args.db}", file=sys.stderr)
-    started = time.perf_counter()
-    executor = make_executor(jobs, args.scheduler)  # before the database: a bad address changes nothing
     with ResultsStore(args.db) as store:
         matrix_id = run_matrix(matrix, store, executor=executor, resume=args.resume, progress=not args.no_progress)
         print(summary_text(store.frame(matrix_id)))

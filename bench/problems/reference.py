@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from foucault_bench.bench.problems.scenes import Scene
+from foucault_bench.bench.run.provenance import PACKAGE_ROOT, source_digest
 from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
 from foucault_bench.bench.verdicts.columns import released_from_rest
 from foucault_bench.integrators import STATUS_OK, get_integrator
@@ -44,8 +45,6 @@ CACHE_ENVIRONMENT_VARIABLE = "FOUCAULT_BENCH_CACHE"
 DEFAULT_CACHE_DIRECTORY = Path.home() / ".cache" / "foucault-bench"
 CACHE_FORMAT = 1
 """Bump when the layout of the cached files changes."""
-
-_PACKAGE_ROOT = Path(__file__).resolve().parents[2]
 
 
 @dataclass
@@ -86,17 +85,14 @@ def cache_directory() -> Path:
 
 @functools.lru_cache(maxsize=None)
 def code_version() -> str:
-    """SHA-256 (16 hex digits) of the sources that determine a reference trajectory, and heyoka's version."""
+    """SHA-256 (16 hex digits) of the sources that determine a reference trajectory, and heyoka's version
+    (``bench.run.provenance.source_digest``)."""
     import heyoka
 
     integrator_module = Path(inspect.getsourcefile(type(get_integrator(REFERENCE_INTEGRATOR)))).resolve()
-    sources = sorted((_PACKAGE_ROOT / "models").glob("*.py"))
-    sources += [integrator_module, _PACKAGE_ROOT / "integrators" / "adaptive.py"]
-    digest = hashlib.sha256(f"heyoka {heyoka.__version__}; format {CACHE_FORMAT}".encode())
-    for path in dict.fromkeys(sources):
-        digest.update(path.name.encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:16]
+    sources = sorted((PACKAGE_ROOT / "models").glob("*.py"))
+    sources += [integrator_module, PACKAGE_ROOT / "integrators" / "adaptive.py"]
+    return source_digest(f"heyoka {heyoka.__version__}; format {CACHE_FORMAT}", dict.fromkeys(sources))
 
 
 def physics_identity(scene: Scene) -> dict[str, Any]:

@@ -31,35 +31,26 @@ written in (PHYSICS.md "Integrators"): the step in seconds is h = kh / k, and th
 from __future__ import annotations
 
 import dataclasses
-import difflib
-import functools
-import hashlib
 import importlib
-import importlib.util
-import json
-import math
-import subprocess
-import tomllib
+import functools
 from dataclasses import dataclass
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR, physics_identity
 from foucault_bench.bench.problems.scenes import SCENES, Scene, scene_from_mapping
-from foucault_bench.bench.run.store import setting_label
+from foucault_bench.bench.run.provenance import code_version, digest
 from foucault_bench.bench.run.timing import TimingPolicy
+from foucault_bench.bench.schema import declared_facts, setting_label
+from foucault_bench.bench.validation import built_in_names, finite_number, is_number, read_toml, suggestion
 
 TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "integrators", "kh", "tol", "override", "plugins",
                   "timing")
 SETTING_KEYS = ("kh", "tol")
 TIMING_KEYS = tuple(field.name for field in dataclasses.fields(TimingPolicy))
-BUILT_IN_DIRECTORY = Path(__file__).resolve().parents[1] / "matrices"
-PACKAGE_ROOT = Path(__file__).resolve().parents[2]
-NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "bench/problems/scenes.py", "bench/problems/reference.py",
-                  "bench/verdicts/*.py", "bench/run/runner.py", "bench/run/timing.py")
-"""Source files (relative to the package root) whose contents are part of every run key."""
+BUILT_IN_FOLDER = "matrices"
+"""Package folder of the built-in matrices (``bench/matrices/NAME.toml``, package data)."""
 
 
 @dataclass(frozen=True)
@@ -73,6 +64,8 @@ class RunSpec:
     plugins: tuple[str, ...]
     timing: TimingPolicy
     code_version: str
+    declared: tuple[tuple[str, Any], ...] = ()
+    """The integrator's declared facts as (results column, value) pairs (``bench.schema.declared_facts``)."""
 
     @property
     def step_s(self) -> float | None:
@@ -87,8 +80,8 @@ class RunSpec:
     def run_key(self) -> str:
         """SHA-256 (16 hex digits) of the scene's name and physics, the integrator, its setting and the code
         version."""
-        return _digest([self.scene.name, physics_identity(self.scene), self.integrator, self.kh, self.tol,
-                        self.code_version])
+        return digest([self.scene.name, physics_identity(self.scene), self.integrator, self.kh, self.tol,
+                       self.code_version])
 
 
 @dataclass(frozen=True)
@@ -106,16 +99,12 @@ class Matrix:
     @functools.cached_property
     def matrix_hash(self) -> str:
         """Hash of the name, every run key and the timing policy: equal hashes mean the same work."""
-        return _digest([self.name, sorted(run.run_key for run in self.runs), dataclasses.asdict(self.timing)])
-
-
-def _digest(value: Any) -> str:
-    return hashlib.sha256(json.dumps(value, sort_keys=True, default=repr).encode()).hexdigest()[:16]
+        return digest([self.name, sorted(run.run_key for run in self.runs), dataclasses.asdict(self.timing)])
 
 
 def built_in_matrices() -> list[str]:
     """Names of the matrices shipped with the package (``bench/matrices/NAME.toml``, package data)."""
-    return sorted(path.stem for path in BUILT_IN_DIRECTORY.glob("*.toml"))
+    return built_in_names(BUILT_IN_FOLDER)
 
 
 def load_matrix(name_or_path: str | Path) -> Matrix:
@@ -123,29 +112,9 @@ def load_matrix(name_or_path: str | Path) -> Matrix:
 
     Raises ``InputError`` listing every problem found, one message each.
     """
-    text, source, default_name = _read_matrix_text(str(name_or_path))
-    try:
-        document = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:  # its message carries "(at line L, column C)"
-        raise InputError(f"{source}: not valid TOML: {error}") from None
+    document, source, _ = read_toml(name_or_path, folder=BUILT_IN_FOLDER, kind="matrix")
+    default_name = str(name_or_path) if source.startswith("built-in") else Path(name_or_path).stem
     return parse_matrix(document, source=source, default_name=default_name)
-
-
-def _read_matrix_text(name_or_path: str) -> tuple[str, str, str]:
-    path = Path(name_or_path)
-    built_ins = built_in_matrices()
-    if name_or_path in built_ins and not path.exists():
-        text = (BUILT_IN_DIRECTORY / f"{name_or_path}.toml").read_text(encoding="utf-8")
-        return text, f"built-in matrix {name_or_path!r}", name_or_path
-    if path.is_file():
-        try:
-            return path.read_text(encoding="utf-8"), str(path), path.stem
-        except (OSError, UnicodeDecodeError) as error:
-            raise InputError(f"{path}: cannot read the matrix file: {error}") from None
-    raise InputError(
-        f"matrix {name_or_path!r} is neither a readable file nor a built-in matrix"
-        f"{_suggestion(name_or_path, built_ins)}; built-in matrices: {', '.join(built_ins)}"
-    )
 
 
 def parse_matrix(document: dict[str, Any], *, source: str = "matrix", default_name: str = "matrix") -> Matrix:
@@ -157,7 +126,7 @@ def parse_matrix(document: dict[str, Any], *, source: str = "matrix", default_na
 
     for key in document:
         if key not in TOP_LEVEL_KEYS:
-            problem(f"unknown key {key!r}{_suggestion(key, TOP_LEVEL_KEYS)}; allowed keys: {', '.join(TOP_LEVEL_KEYS)}")
+            problem(f"unknown key {key!r}{suggestion(key, TOP_LEVEL_KEYS)}; allowed keys: {', '.join(TOP_LEVEL_KEYS)}")
 
     name = document.get("name", default_name)
     if not isinstance(name, str) or not name:
@@ -189,11 +158,6 @@ def parse_matrix(document: dict[str, Any], *, source: str = "matrix", default_na
     )
 
 
-def _suggestion(word: str, choices: Any) -> str:
-    close = difflib.get_close_matches(str(word), [str(choice) for choice in choices], n=1)
-    return f" (did you mean {close[0]!r}?)" if close else ""
-
-
 def _string_list(document: dict[str, Any], key: str, problem, *, required: bool) -> list[str]:
     if key not in document:
         if required:
@@ -215,7 +179,7 @@ def _scenes(document: dict[str, Any], problem) -> list[Scene]:
         if name in SCENES:
             scenes.append(SCENES[name])
         else:
-            problem(f"scenes: unknown scene {name!r}{_suggestion(name, SCENES)}; built-in scenes: {', '.join(SCENES)}")
+            problem(f"scenes: unknown scene {name!r}{suggestion(name, SCENES)}; built-in scenes: {', '.join(SCENES)}")
     inline = document.get("scene", {})
     if not isinstance(inline, dict):
         problem(f"scene must be a table of inline scenes ([scene.NAME]), got {inline!r}")
@@ -245,10 +209,10 @@ def _timing(table: Any, problem) -> TimingPolicy:
     defaults = TimingPolicy()
     for key, value in table.items():
         if key not in TIMING_KEYS:
-            problem(f"timing: unknown key {key!r}{_suggestion(key, TIMING_KEYS)}; allowed keys: {', '.join(TIMING_KEYS)}")
+            problem(f"timing: unknown key {key!r}{suggestion(key, TIMING_KEYS)}; allowed keys: {', '.join(TIMING_KEYS)}")
             continue
         wanted = type(getattr(defaults, key))
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or (wanted is int and not isinstance(value, int)):
+        if not is_number(value) or (wanted is int and not isinstance(value, int)):
             problem(f"timing: {key} must be {'an integer' if wanted is int else 'a number'}, got {value!r}")
             continue
         values[key] = wanted(value)
@@ -265,9 +229,9 @@ def _sweep(value: Any, key: str, where: str, problem) -> list[float]:
         return []
     accepted: list[float] = []
     for item in value:
-        if isinstance(item, bool) or not isinstance(item, (int, float)):
+        if not is_number(item):
             problem(f"{where}: {key} entries must be numbers, got {item!r}")
-        elif key == "kh" and not (math.isfinite(item) and item > 0):
+        elif key == "kh" and not finite_number(item, positive=True):
             problem(f"{where}: step size must be > 0: kh = {item!r} (kh = k·h, the step in units of 1/k)")
         elif key == "tol" and not 0.0 < item < 1.0:
             problem(f"{where}: tolerance must lie in (0, 1): tol = {item!r}")
@@ -289,7 +253,7 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
         if name == REFERENCE_INTEGRATOR:
             problem(f"integrators: {name} computes the references (bench.problems.reference) and is not swept")
         elif name not in REGISTRY:
-            problem(f"integrators: unknown integrator {name!r}{_suggestion(name, REGISTRY)}; "
+            problem(f"integrators: unknown integrator {name!r}{suggestion(name, REGISTRY)}; "
                     f"known integrators: {', '.join(sorted(set(REGISTRY) - {REFERENCE_INTEGRATOR}))}")
         else:
             integrators.append(REGISTRY[name])
@@ -303,14 +267,14 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
     for name, table in overrides.items():
         where = f"override.{name}"
         if name not in names:
-            problem(f"{where}: {name!r} is not listed in integrators{_suggestion(name, names)}")
+            problem(f"{where}: {name!r} is not listed in integrators{suggestion(name, names)}")
             continue
         if not isinstance(table, dict):
             problem(f"{where} must be a table with kh or tol, got {table!r}")
             continue
         for key, value in table.items():
             if key not in SETTING_KEYS:
-                problem(f"{where}: unknown key {key!r}{_suggestion(key, SETTING_KEYS)}; allowed keys: kh, tol")
+                problem(f"{where}: unknown key {key!r}{suggestion(key, SETTING_KEYS)}; allowed keys: kh, tol")
             else:
                 own.setdefault(name, {})[key] = _sweep(value, key, where, problem)
 
@@ -343,6 +307,7 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
                     plugins=tuple(plugins),
                     timing=timing,
                     code_version=code,
+                    declared=tuple(declared_facts(integrator).items()),
                 ))
     for key in shared:
         if key not in used and integrators:
@@ -360,40 +325,3 @@ def _check_steps_fit(kh_values: list[float], where: str, scenes: list[Scene], pr
         if too_coarse:
             problem(f"{where}: kh = {', '.join(f'{value:g}' for value in too_coarse)} exceeds what scene "
                     f"{scene.name!r} allows: a step is at most one output interval, kh <= k·Δ = {largest:.4g}")
-
-
-@functools.lru_cache(maxsize=1)
-def git_commit() -> str | None:
-    """HEAD commit of the source tree the package is imported from, with ``+dirty`` for uncommitted
-    changes to tracked files; ``None`` outside a git checkout (provenance only, not part of run keys)."""
-    try:
-        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=PACKAGE_ROOT, capture_output=True, text=True,
-                                timeout=10)
-        if commit.returncode != 0:
-            return None
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=PACKAGE_ROOT,
-                               capture_output=True, text=True, timeout=10)
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return commit.stdout.strip() + ("+dirty" if dirty.stdout.strip() else "")
-
-
-@functools.lru_cache(maxsize=None)
-def code_version(plugins: tuple[str, ...] = ()) -> str:
-    """SHA-256 (16 hex digits) of the package version and of every source file that determines a row's
-    numbers (``NUMBER_SOURCES``, plus the plug-in modules' files): a stored row is reused by ``--resume`` only
-    when none of them changed, committed or not."""
-    try:
-        package = version("foucault-bench")
-    except PackageNotFoundError:
-        package = "unknown"
-    digest = hashlib.sha256(package.encode())
-    paths = sorted({path for pattern in NUMBER_SOURCES for path in PACKAGE_ROOT.glob(pattern)})
-    for module_name in plugins:
-        spec = importlib.util.find_spec(module_name)
-        if spec is not None and spec.origin and spec.origin not in ("built-in", "frozen"):
-            paths.append(Path(spec.origin))
-    for path in paths:
-        digest.update(path.name.encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:16]

@@ -104,6 +104,7 @@ def base_row(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
         duration_s=spec.scene.duration_s,
         message="",
     )
+    row.update(spec.declared)  # the integrator's declared facts (bench.schema.DECLARED_FACTS)
     return row
 
 
