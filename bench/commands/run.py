@@ -11,6 +11,7 @@ import sys
 import time
 
 from foucault_bench.bench.commands import options
+from foucault_bench.bench.errors import require_extra
 from foucault_bench.bench.run.store import DEFAULT_DB  # the store module imports no numerical library
 
 
@@ -30,6 +31,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    if args.scheduler:
+        require_extra("distributed", "dask", "--scheduler")
     jobs = options.jobs(args.jobs)
     started = time.perf_counter()
 
