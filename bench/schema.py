@@ -111,10 +111,10 @@ def declared_facts(integrator: Any) -> dict[str, Any]:
 
 def setting_label(kh: float | None, tol: float | None) -> str:
     """``tol=1e-08`` for an adaptive run, ``kh=0.125`` for a fixed-step one (missing values are None or NaN)."""
-    return f"tol={tol:g}" if _present(tol) else f"kh={kh:.4g}"
+    return f"tol={tol:g}" if is_present(tol) else f"kh={kh:.4g}"
 
 
-def _present(value: Any) -> bool:
+def is_present(value: Any) -> bool:
     """Not None, not NaN (pandas' NA reads as missing too)."""
     try:
         return value is not None and not math.isnan(value)

@@ -120,7 +120,7 @@ def test_compare_finds_a_one_ulp_difference_and_reports_cost_ratios(filled):
 
 def test_summary_has_one_line_per_scene_and_integrator_with_the_best_error(filled):
     store, matrix_id, rows = filled
-    summary = summarize(store.frame()).set_index("integrator")
+    summary = pd.DataFrame(summarize(store.records())).set_index("integrator")
     assert set(summary.index) == {"rk4", "cvode_bdf"}
     assert summary.loc["rk4", "runs"] == 2
     assert summary.loc["rk4", "best_reference_error"] == 1e-4  # the finer of rows 0 (NaN) and 1

@@ -50,7 +50,7 @@ def main(args: argparse.Namespace) -> int:
             print(runs.to_string(index=False, na_rep="–"))
         matrix_id = store.resolve_matrix_id(args.matrix_id)
         print(f"\nmatrix run {matrix_id}:")
-        print(summary_text(store.frame(matrix_id)))
+        print(summary_text(store.records(matrix_id)))
     return 0
 
 

@@ -53,7 +53,7 @@ def main(args: argparse.Namespace) -> int:
           f"{where}, results in {args.db}", file=sys.stderr)
     with ResultsStore(args.db) as store:
         matrix_id = run_matrix(matrix, store, executor=executor, resume=args.resume, progress=not args.no_progress)
-        print(summary_text(store.frame(matrix_id)))
+        print(summary_text(store.records(matrix_id)))
     print(f"matrix run {matrix_id} finished in {time.perf_counter() - started:.1f} s "
           f"(`foucault-bench results --db {args.db}` lists stored runs)", file=sys.stderr)
     return 0

@@ -28,6 +28,7 @@ import os
 import tempfile
 import time
 from dataclasses import dataclass
+from importlib.metadata import version
 from pathlib import Path
 from typing import Any
 
@@ -86,13 +87,12 @@ def cache_directory() -> Path:
 @functools.lru_cache(maxsize=None)
 def code_version() -> str:
     """SHA-256 (16 hex digits) of the sources that determine a reference trajectory, and heyoka's version
-    (``bench.run.provenance.source_digest``)."""
-    import heyoka
-
+    (``bench.run.provenance.source_digest``; the version from the package metadata: importing heyoka to read
+    it would cost a worker about 0.7 s)."""
     integrator_module = Path(inspect.getsourcefile(type(get_integrator(REFERENCE_INTEGRATOR)))).resolve()
     sources = sorted((PACKAGE_ROOT / "models").glob("*.py"))
     sources += [integrator_module, PACKAGE_ROOT / "integrators" / "adaptive.py"]
-    return source_digest(f"heyoka {heyoka.__version__}; format {CACHE_FORMAT}", dict.fromkeys(sources))
+    return source_digest(f"heyoka {version('heyoka')}; format {CACHE_FORMAT}", dict.fromkeys(sources))
 
 
 def physics_identity(scene: Scene) -> dict[str, Any]:

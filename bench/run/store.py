@@ -28,11 +28,11 @@ import sqlite3
 import uuid
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Iterable, Mapping
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.schema import (
-    COLUMN_NAMES, COLUMNS, MIGRATIONS, SCHEMA_VERSION, VERDICT_COLUMNS, setting_label,
+    COLUMN_NAMES, COLUMNS, MIGRATIONS, SCHEMA_VERSION, VERDICT_COLUMNS, is_present, setting_label,
 )
 
 if TYPE_CHECKING:  # pandas is imported by the methods that build frames, not at start-up
@@ -270,19 +270,24 @@ class ResultsStore:
             params=(self.resolve_matrix_id(matrix_id),),
         )
 
+    def records(self, matrix_id: str | None = None) -> list[dict[str, Any]]:
+        """The run rows of a matrix run (as ``frame`` selects it) as plain dicts, NULL as ``None``, without
+        pandas."""
+        cursor = self.connection.execute(f"SELECT * FROM {RUNS_TABLE} WHERE matrix_id = ? ORDER BY rowid",
+                                         (self.resolve_matrix_id(matrix_id),))
+        names = [description[0] for description in cursor.description]
+        return [dict(zip(names, values)) for values in cursor]
+
     # --- adequacy and study tables --------------------------------------------------------------------------
 
     def write_adequacy(self, matrix_id: str, scene: str, rows: list[dict[str, Any]]) -> None:
         """Append model-adequacy rows of one scene, tagged with the matrix id (replacing earlier ones)."""
-        import pandas as pd
-
         if self._table_exists(ADEQUACY_TABLE):
             with self.connection:
                 self.connection.execute(
                     f"DELETE FROM {ADEQUACY_TABLE} WHERE matrix_id = ? AND scene = ?", (matrix_id, scene))
-        if rows:
-            frame = pd.DataFrame([{"matrix_id": matrix_id, "scene": scene, **row} for row in rows])
-            self._append_frame(ADEQUACY_TABLE, frame)
+        records = [{"matrix_id": matrix_id, "scene": scene, **row} for row in rows]
+        self._append(ADEQUACY_TABLE, list(dict.fromkeys(key for record in records for key in record)), records)
 
     def adequacy(self, matrix_id: str | None = None) -> pd.DataFrame:
         import pandas as pd
@@ -299,7 +304,7 @@ class ResultsStore:
         if replace:
             with self.connection:
                 self.connection.execute(f"DROP TABLE IF EXISTS {name}")
-        self._append_frame(name, frame)
+        self._append(name, [str(column) for column in frame.columns], frame.to_dict("records"))
 
     def read_table(self, name: str) -> pd.DataFrame:
         import pandas as pd
@@ -322,50 +327,62 @@ class ResultsStore:
         return self.connection.execute(
             "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?", (name,)).fetchone() is not None
 
-    def _append_frame(self, name: str, frame: pd.DataFrame) -> None:
-        """Append ``frame`` with pandas' ``to_sql``, first adding any column the stored table lacks."""
-        if self._table_exists(name):
-            stored = {row[1] for row in self.connection.execute(f"PRAGMA table_info({name})")}
-            with self.connection:
-                for column in frame.columns:
+    def _append(self, name: str, columns: list[str], records: list[Mapping[str, Any]]) -> None:
+        """Append ``records`` (mappings; a missing key is NULL) to table ``name``, creating the table with
+        ``columns`` or adding the columns it lacks. Plain ``sqlite3``: the runner stores adequacy rows without
+        importing pandas."""
+        if not columns:
+            return
+        quoted = ", ".join(f'"{column}"' for column in columns)
+        with self.connection:
+            if self._table_exists(name):
+                stored = {row[1] for row in self.connection.execute(f"PRAGMA table_info({name})")}
+                for column in columns:
                     if column not in stored:
                         self.connection.execute(f'ALTER TABLE {name} ADD COLUMN "{column}"')
-        with self.connection:
-            frame.to_sql(name, self.connection, if_exists="append", index=False)
+            else:
+                self.connection.execute(f"CREATE TABLE {name} ({quoted})")
+            self.connection.executemany(
+                f"INSERT INTO {name} ({quoted}) VALUES ({', '.join('?' for _ in columns)})",
+                [[_plain(record.get(column)) for column in columns] for record in records])
 
 
 # --- views ----------------------------------------------------------------------------------------------------
 
 
-def summarize(frame: pd.DataFrame) -> pd.DataFrame:
-    """One line per scene × integrator: run counts by status, the best (smallest) reference error among the
-    ok runs, the setting that reached it and its cost (median wall time, right-hand-side evaluations)."""
-    import pandas as pd
-
+def summarize(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """One line per scene × integrator (sorted by both): run counts by status, the best (smallest) reference
+    error among the ok runs, the setting that reached it and its cost (median wall time, right-hand-side
+    evaluations). ``rows`` are run rows as mappings (``ResultsStore.records``, or a frame's records); plain
+    Python, so that printing a summary imports no pandas."""
+    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
+    for row in rows:
+        groups.setdefault((row["scene"], row["integrator"]), []).append(row)
     lines = []
-    for (scene, integrator), group in frame.groupby(["scene", "integrator"]):
-        ok = group[group["status"] == "ok"]
-        best = ok.loc[ok["reference_error"].idxmin()] if ok["reference_error"].notna().any() else None
+    for (scene, integrator), group in sorted(groups.items()):
+        ok = [row for row in group if row["status"] == "ok" and is_present(row["reference_error"])]
+        best = min(ok, key=lambda row: row["reference_error"]) if ok else None  # the first of equal errors
         lines.append({
             "scene": scene,
             "integrator": integrator,
             "runs": len(group),
-            "ok": int((group["status"] == "ok").sum()),
-            "diverged": int((group["status"] == "diverged").sum()),
-            "failed": int((group["status"] == "failed").sum()),
+            **{status: sum(row["status"] == status for row in group) for status in ("ok", "diverged", "failed")},
             "best_reference_error": None if best is None else best["reference_error"],
             "at": None if best is None else setting_label(best["kh"], best["tol"]),
             "wall_time_s": None if best is None else best["wall_time_s"],
             "nfev": None if best is None else best["nfev"],
         })
-    return pd.DataFrame(lines)
+    return lines
 
 
-def summary_text(frame: pd.DataFrame) -> str:
+def summary_text(rows: Iterable[Mapping[str, Any]]) -> str:
     """``summarize`` as the table printed at the end of a matrix run and by ``foucault-bench results``."""
-    if frame.empty:
+    from tabulate import tabulate
+
+    lines = summarize(rows)
+    if not lines:
         return "no runs stored"
-    return summarize(frame).to_string(index=False, float_format=lambda value: f"{value:.3g}", na_rep="–")
+    return tabulate(lines, headers="keys", floatfmt=".3g", missingval="–")
 
 
 def _bits_equal(left: pd.Series, right: pd.Series) -> pd.Series:
