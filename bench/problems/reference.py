@@ -85,7 +85,7 @@ def cache_directory() -> Path:
 
 
 @functools.lru_cache(maxsize=None)
-def code_version() -> str:
+def sources_version() -> str:
     """SHA-256 (16 hex digits) of the sources that determine a reference trajectory, and heyoka's version
     (``bench.run.provenance.source_digest``; the version from the package metadata: importing heyoka to read
     it would cost a worker about 0.7 s)."""
@@ -107,12 +107,12 @@ def physics_identity(scene: Scene) -> dict[str, Any]:
 
 def reference_key(scene: Scene) -> str:
     """Cache key of the scene's reference: SHA-256 (24 hex digits) of its physics, the reference integrator
-    and tolerance, and ``code_version``."""
+    and tolerance, and ``sources_version``."""
     identity = {
         "scene": physics_identity(scene),
         "integrator": REFERENCE_INTEGRATOR,
         "tolerance": REFERENCE_TOLERANCE,
-        "code": code_version(),
+        "code": sources_version(),
     }
     return hashlib.sha256(json.dumps(identity, sort_keys=True, default=repr).encode()).hexdigest()[:24]
 
@@ -182,7 +182,7 @@ def _store(path: Path, scene: Scene, reference: Reference) -> None:
         "physics": physics_identity(scene),
         "integrator": reference.integrator,
         "tolerance": reference.tolerance,
-        "code_version": code_version(),
+        "code_version": sources_version(),
         "steps": reference.steps,
         "compute_time_s": reference.compute_time_s,
     }
