@@ -12,7 +12,9 @@ Sections (one module each; each returns target rows and a detail table):
 * ``compile`` (``compile_cache``): cold and warm compile time per integrator;
 * ``memory``: peak RSS of 10⁷- and 10⁸-step runs with streaming verdicts;
 * ``sweeps``: a latitude sweep with heyoka's batch mode and ensembles against a scalar loop;
-* ``matrices``: wall time of the quick and default matrices, cold and warm (compile once).
+* ``matrices``: wall time of the quick and default matrices, cold and warm (compile once);
+* ``startup``: ``--help`` of every command, and where a 5-run matrix's time goes (imports, validation,
+  references, integration, store).
 
 The summary prints one line per measured figure with its target and ``met``/``missed`` (``info`` where the
 brief sets no target, ``skipped`` with the reason where it could not be measured, e.g. no C compiler). The
@@ -35,6 +37,7 @@ SECTIONS: dict[str, str] = {
     "memory": "foucault_bench.bench.perf.memory",
     "sweeps": "foucault_bench.bench.perf.sweeps",
     "matrices": "foucault_bench.bench.perf.matrices",
+    "startup": "foucault_bench.bench.perf.startup",
 }
 
 

@@ -6,7 +6,8 @@
   other code;
 * ``source_digest``: the same hash over any list of files (the reference cache keys its files with it);
 * ``digest``: a short SHA-256 of plain data (run keys, matrix hashes);
-* ``git_commit``, ``cpu_model``, ``package_versions``, ``machine``: the matrix run's provenance record.
+* ``git_commit``, ``cpu_model``, ``package_versions``, ``machine``: the matrix run's provenance record;
+  ``available_cores``: the cores this process may use (the default number of workers).
 
 This module imports only the standard library, so that both the matrix reader and the results store use it
 without importing each other.
@@ -101,6 +102,11 @@ def git_commit() -> str | None:
     except (OSError, subprocess.SubprocessError):
         return None
     return commit.stdout.strip() + ("+dirty" if dirty.stdout.strip() else "")
+
+
+def available_cores() -> int:
+    """The cores this process may use (its CPU affinity where the platform has one): the default ``--jobs``."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 def cpu_model() -> str:
