@@ -36,8 +36,6 @@ import numpy as np
 
 from foucault_bench.bench.problems.scenes import Scene
 from foucault_bench.bench.run.provenance import PACKAGE_ROOT, source_digest
-from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
-from foucault_bench.bench.verdicts.columns import released_from_rest
 from foucault_bench.integrators import STATUS_OK, get_integrator
 from foucault_bench.integrators.heyoka_taylor import REFERENCE_TOLERANCE
 
@@ -167,6 +165,13 @@ def _compute(scene: Scene, key: str) -> Reference:
 
 def _derive(scene: Scene, t: np.ndarray, y: np.ndarray, **provenance: Any) -> Reference:
     """A ``Reference`` with the turning points and precession rate measured on its grid."""
+    # here, not at the top: the verdicts import scipy.interpolate, which a process that only reads matrices
+    # (and so this module's constants) should not pay
+    from foucault_bench.bench.verdicts.columns import released_from_rest
+    from foucault_bench.bench.verdicts.turning_points import (
+        grid_accelerations, precession_rate, turning_points_from_grid,
+    )
+
     points = turning_points_from_grid(t, y, grid_accelerations(scene.model_object, scene.params, y),
                                       released_from_rest(scene.params))
     rate, stderr = precession_rate(points)

@@ -17,6 +17,10 @@ Nothing is lost when one run fails: an exception anywhere in a run (solver, verd
 is replaced; the runs that were in flight are retried one at a time in a fresh worker, and the one that kills
 its worker again is stored as ``failed``.
 
+Start-up: ``LocalExecutor`` starts its workers at once, and each first imports ``WORKER_MODULES`` (``warm_up``),
+while the main process reads and validates the matrix; this module imports no numerical library at the top,
+so the main process pays only for what it uses (the matrix, the store).
+
 Workers: ``jobs`` processes started with the ``spawn`` method (forking a process that has started numba's,
 LLVM's or TBB's threads is unsafe), each made single-threaded by ``bench.run.timing.limit_threads`` before it
 imports numpy, so that timings do not depend on how many runs share the machine's cores. Longer runs are
@@ -33,20 +37,27 @@ import sys
 import traceback
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
-from typing import Any, Callable, Iterator
+from typing import TYPE_CHECKING, Any, Callable, Iterator
 
 from tqdm import tqdm
 
-from foucault_bench.bench.problems.adequacy import model_adequacy
 from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.run.matrix import Matrix, RunSpec
-from foucault_bench.bench.problems.reference import reference_for
 from foucault_bench.bench.schema import COLUMN_NAMES, VERDICT_COLUMNS
-from foucault_bench.bench.problems.scenes import Scene
-from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.run.timing import limit_threads, peak_rss_mb, time_repeated
-from foucault_bench.bench.verdicts.columns import compute_verdicts
-from foucault_bench.integrators import STATUS_FAILED, STATUS_OK, get_integrator
+
+if TYPE_CHECKING:  # the main process imports this module before its workers start (module docstring)
+    from foucault_bench.bench.problems.scenes import Scene
+    from foucault_bench.bench.run.matrix import Matrix, RunSpec
+    from foucault_bench.bench.run.store import ResultsStore
+
+WORKER_MODULES = (
+    "foucault_bench.integrators",
+    "foucault_bench.bench.problems.reference",
+    "foucault_bench.bench.problems.adequacy",
+    "foucault_bench.bench.verdicts.columns",
+)
+"""What a worker imports to run (integrators, references, adequacy, verdicts): imported where they are used and
+by ``warm_up``, not at the top, so that the main process, which never runs a scene, does not pay for them."""
 
 NOT_DETERMINISTIC = "warning: the output differed between repeated calls (not deterministic)"
 DASK_CONNECT_TIMEOUT_S = 10.0
@@ -75,8 +86,18 @@ def _describe(error: BaseException) -> str:
     return f"{type(error).__name__}: {error}{where}"
 
 
+def warm_up() -> None:
+    """Import ``WORKER_MODULES`` (a worker's first task, while the main process validates the matrix)."""
+    limit_threads()
+    for module_name in WORKER_MODULES:
+        importlib.import_module(module_name)
+
+
 def prepare_scene(scene: Scene, plugins: tuple[str, ...] = ()) -> SceneReady:
     """Compute (or load from the disk cache) the scene's reference and its model-adequacy rows."""
+    from foucault_bench.bench.problems.adequacy import model_adequacy
+    from foucault_bench.bench.problems.reference import reference_for
+
     limit_threads()
     _import_plugins(plugins)
     try:
@@ -110,6 +131,10 @@ def base_row(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
 
 def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
     """Run one matrix entry and return its row (``bench.schema.COLUMNS``). Never raises."""
+    from foucault_bench.bench.problems.reference import reference_for
+    from foucault_bench.bench.verdicts.columns import compute_verdicts
+    from foucault_bench.integrators import STATUS_FAILED, STATUS_OK, get_integrator
+
     limit_threads()
     row = base_row(spec, matrix_id)
     stage = "setup"
@@ -171,6 +196,8 @@ class LocalExecutor:
     def __init__(self, jobs: int):
         self.jobs = jobs
         self.pool = self._new_pool(jobs)
+        for _ in range(jobs):  # one per worker: each spawns now and imports while the main process validates
+            self.pool.submit(warm_up)
 
     @staticmethod
     def _new_pool(workers: int) -> concurrent.futures.ProcessPoolExecutor:
@@ -257,6 +284,8 @@ def _scene_failure(scene: Scene, plugins: tuple[str, ...], reason: str = WORKER_
 
 def _run_failure(spec: RunSpec, matrix_id: str, reason: str = WORKER_DIED) -> dict[str, Any]:
     """The row of a run that could not be executed (its worker died, or its scene has no reference)."""
+    from foucault_bench.integrators import STATUS_FAILED
+
     row = base_row(spec, matrix_id)
     row.update(status=STATUS_FAILED, message=reason)
     return row
