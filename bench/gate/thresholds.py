@@ -32,13 +32,9 @@ interval (``integrators.fixed_step.uniform_output_stride``), so a stored row hol
 ``kh`` matches a row whose kh equals the requested value or the effective step that value gives on the row's
 own output grid (spacing = duration_s / (n_out − 1), k = kh / step_s of the row).
 
-Margin (the table's ``margin`` column): the headroom factor when the bound and the measured value are both
-positive (bound ÷ measured for an upper bound, measured ÷ bound for a lower one; below 1 fails), otherwise the
-difference (bound − measured, or measured − bound; below 0 fails).
-
-Exit status: 0 when every bound holds, 1 when any fails, 2 on bad input (``bench.errors.InputError``: malformed
-TOML, an unknown key, scene, integrator, family or column, a bound that selects no row) — bad input is found
-before a matrix is run.
+Every problem with a file (malformed TOML, an unknown key, kind or column, a bad number) is reported at once as
+``bench.errors.InputError``; whether its scenes, integrators and settings exist in the rows to check is
+``bench.gate.select.validate_against``'s job, and the margin of a checked line is ``bench.gate.evaluate``'s.
 """
 
 from __future__ import annotations
