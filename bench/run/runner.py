@@ -29,10 +29,12 @@ started first (adaptive before fixed-step, longer scenes and finer settings firs
 
 from __future__ import annotations
 
+import atexit
 import collections
 import concurrent.futures
 import importlib
 import multiprocessing
+import os
 import sys
 import traceback
 from concurrent.futures.process import BrokenProcessPool
@@ -51,6 +53,7 @@ if TYPE_CHECKING:  # the main process imports this module before its workers sta
     from foucault_bench.bench.run.store import ResultsStore
 
 WORKER_MODULES = (
+    "heyoka",  # the reference integrator's library: imported before any timed call, never counted as compile time
     "foucault_bench.integrators",
     "foucault_bench.bench.problems.reference",
     "foucault_bench.bench.problems.adequacy",
@@ -84,6 +87,23 @@ def _describe(error: BaseException) -> str:
     frames = traceback.extract_tb(error.__traceback__)
     where = f" ({frames[-1].filename.rsplit('/', 1)[-1]}:{frames[-1].lineno})" if frames else ""
     return f"{type(error).__name__}: {error}{where}"
+
+
+def start_worker() -> None:
+    """Initializer of a local worker process: one thread per native pool (``limit_threads``), and an exit
+    without the interpreter's finalization once the pool shuts the worker down (``_exit_at_once``)."""
+    limit_threads()
+    atexit.register(_exit_at_once)
+
+
+def _exit_at_once() -> None:
+    """End a finished worker at once (``os._exit``). Its results are already sent (the pool's result queue
+    writes synchronously); what is skipped is tearing down the numerical libraries, measured at 0.5-1.2 s per
+    worker after a small matrix (bench/PERF.md "Start-up"), paid by every ``run`` while it waits for its
+    workers to end. Registered last, it runs first of the exit handlers."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(0)
 
 
 def warm_up() -> None:
@@ -202,7 +222,7 @@ class LocalExecutor:
     @staticmethod
     def _new_pool(workers: int) -> concurrent.futures.ProcessPoolExecutor:
         return concurrent.futures.ProcessPoolExecutor(
-            max_workers=workers, mp_context=multiprocessing.get_context("spawn"), initializer=limit_threads)
+            max_workers=workers, mp_context=multiprocessing.get_context("spawn"), initializer=start_worker)
 
     def map_unordered(self, function: Callable, tasks: list[tuple], on_worker_death: Callable) -> Iterator:
         """Yield ``function(*task)`` for every task as results arrive, at most ``jobs`` in flight. A task whose
