@@ -28,6 +28,18 @@ def test_parsing_any_command_imports_no_numerical_library():
     assert loaded == []
 
 
+def test_the_run_command_starts_its_workers_before_importing_a_numerical_library():
+    """``run`` creates its executor (workers start and import) before reading the matrix: the modules it
+    needs for that, the runner and the store, import no numerical library themselves."""
+    code = (
+        "import sys\n"
+        "import foucault_bench.bench.run.runner, foucault_bench.bench.run.store\n"
+        f"print(' '.join(sorted(name for name in {HEAVY_MODULES!r} if name in sys.modules)))\n"
+    )
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert loaded == []
+
+
 @pytest.mark.parametrize("command", list(COMMANDS))
 def test_every_command_has_help(command, capsys):
     with pytest.raises(SystemExit) as exit_info:
