@@ -22,15 +22,21 @@ def run_for_check(thresholds: Thresholds, matrix_name: str, *, db: str | None, j
                   progress: bool) -> tuple[pd.DataFrame, str]:
     """Validate ``thresholds`` against the planned runs of the matrix (before anything runs), run the matrix
     into ``db`` (a temporary database when ``None``) and return its rows and a description of them."""
-    from foucault_bench.bench.run.matrix import load_matrix
-    from foucault_bench.bench.run.runner import run_matrix
-    from foucault_bench.bench.run.store import ResultsStore
+    from foucault_bench.bench.run.runner import LocalExecutor, run_matrix
 
-    matrix = load_matrix(matrix_name)
-    validate_against(thresholds, planned_rows(matrix), what=f"matrix {matrix.name!r}")
+    executor = LocalExecutor(jobs)  # first: the workers start while the matrix and thresholds are validated
+    try:
+        from foucault_bench.bench.run.matrix import load_matrix
+        from foucault_bench.bench.run.store import ResultsStore
+
+        matrix = load_matrix(matrix_name)
+        validate_against(thresholds, planned_rows(matrix), what=f"matrix {matrix.name!r}")
+    except BaseException:
+        executor.close()
+        raise
     with tempfile.TemporaryDirectory(prefix="foucault-check-") as scratch:
         path = db or str(Path(scratch) / "check.sqlite")
         with ResultsStore(path) as store:
-            matrix_id = run_matrix(matrix, store, jobs=jobs, progress=progress)
+            matrix_id = run_matrix(matrix, store, executor=executor, progress=progress)
             frame = store.frame(matrix_id)
     return frame, f"matrix {matrix.name!r} (run {matrix_id}{f' in {db}' if db else ''})"
