@@ -14,12 +14,13 @@ for a compiled fixed-step scheme) in a file of its own, set the class attributes
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import os
 import sys
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from typing import ClassVar, Iterator
+from typing import ClassVar, Iterator, TextIO
 
 import numpy as np
 
@@ -186,24 +187,35 @@ class Integrator(ABC):
 
 @contextlib.contextmanager
 def quiet_native_output() -> Iterator[None]:
-    """Redirect the process's stdout and stderr file descriptors to /dev/null for the duration, so that
-    native libraries (SUNDIALS warnings) do not write over the terminal or a progress bar. Python-level
-    writes are flushed first; nothing is redirected when the descriptors are not available."""
-    try:
-        fds = (sys.stdout.fileno(), sys.stderr.fileno())
-    except (AttributeError, OSError, ValueError):
-        yield
-        return
-    sys.stdout.flush()
-    sys.stderr.flush()
-    saved = [os.dup(fd) for fd in fds]
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    try:
-        for fd in fds:
-            os.dup2(devnull, fd)
-        yield
-    finally:
-        for fd, copy in zip(fds, saved):
-            os.dup2(copy, fd)
-            os.close(copy)
-        os.close(devnull)
+    """Silence everything printed for the duration, so that native libraries (SUNDIALS warnings, printed by C
+    code or by a binding's Python error handler) do not write over the terminal or a progress bar: the
+    process's stdout and stderr file descriptors (1 and 2, where C code writes whatever ``sys.stdout`` is) go
+    to /dev/null, and so do ``sys.stdout`` and ``sys.stderr``. Python-level writes are flushed first; the
+    descriptors are left alone when they are not open."""
+    for stream in {sys.stdout, sys.stderr, sys.__stdout__, sys.__stderr__}:
+        if stream is not None:
+            stream.flush()
+    sink = _devnull()
+    with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
+        fds = (1, 2)
+        try:
+            for fd in fds:
+                os.fstat(fd)
+        except OSError:
+            yield
+            return
+        saved = [os.dup(fd) for fd in fds]
+        try:
+            for fd in fds:
+                os.dup2(sink.fileno(), fd)
+            yield
+        finally:
+            for fd, copy in zip(fds, saved):
+                os.dup2(copy, fd)
+                os.close(copy)
+
+
+@functools.cache
+def _devnull() -> TextIO:
+    """/dev/null opened once per process for writing (``quiet_native_output`` runs around every solve)."""
+    return open(os.devnull, "w")  # kept open for the life of the process

@@ -283,6 +283,14 @@ class Model:
         return jacobian_into
 
     @functools.cached_property
+    def numba_jacobian_into(self) -> Callable:
+        """njit ``(t, y, out, p) -> None``: the same derivatives as ``jacobian_into``, compiled by numba for
+        callers in compiled code (CVODE's Jacobian callback); equal to it to round-off (``models.jacobian``)."""
+        from foucault_bench.models.jacobian import numba_jacobian_into
+
+        return numba_jacobian_into(self)
+
+    @functools.cached_property
     def jacobian(self) -> Callable:
         """``(t, y, p) -> ndarray (4, 4)``: ``jacobian_into`` returning a new array (scipy style)."""
         jacobian_into = self.jacobian_into

@@ -9,6 +9,7 @@ Sections (one module each; each returns target rows and a detail table):
 
 * ``loops`` (``fixed_step``): fixed-step loops against plain C loops compiled now with ``cc -O3``;
 * ``adapters``: CVODE, heyoka and solve_ivp adapters against the bare libraries;
+* ``cvode``: CVODE with compiled callbacks against the same solves driven by scikit-sundae;
 * ``compile`` (``compile_cache``): cold and warm compile time per integrator;
 * ``memory``: peak RSS of 10⁷- and 10⁸-step runs with streaming verdicts;
 * ``sweeps``: a latitude sweep with heyoka's batch mode and ensembles against a scalar loop;
@@ -33,6 +34,7 @@ from foucault_bench.bench.perf.measure import ROW_HEADERS, Row, machine_descript
 SECTIONS: dict[str, str] = {
     "loops": "foucault_bench.bench.perf.fixed_step",
     "adapters": "foucault_bench.bench.perf.adapters",
+    "cvode": "foucault_bench.bench.perf.cvode",
     "compile": "foucault_bench.bench.perf.compile_cache",
     "memory": "foucault_bench.bench.perf.memory",
     "sweeps": "foucault_bench.bench.perf.sweeps",

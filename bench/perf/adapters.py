@@ -1,15 +1,16 @@
 """Section ``adapters``: our adaptive-integrator adapters against the bare libraries.
 
 Each adapter's ``solve`` (as the runner calls it: verdict streams on) is timed against the library called
-directly with the same compiled right-hand side, Jacobian, tolerances, output grid and turning-point event,
-set up once outside the timed call as a user would. Target: adapter ≤ 1.05× the bare call. Both sides must
+directly with the same compiled right-hand side, Jacobian, tolerances, output grid and turning-point event
+(none for CVODE, whose adapters time the output grid only), set up once outside the timed call as a user would. Target: adapter ≤ 1.05× the bare call. Both sides must
 return the same states (checked); what remains is the adapter's own work (validation, bookkeeping, silencing
 the C libraries' output, the step guards of the scipy adapter, the copy of heyoka's compiled integrator).
 
-Also reported for CVODE: the time per right-hand-side evaluation of a whole solve, the cost of one call of
-the numba right-hand side from Python, the same solve's cost per evaluation with a plain-Python oscillator
+Also reported for CVODE: the time per right-hand-side evaluation of a whole scikit-sundae solve
+(``cvode_*_py``; the compiled ``cvode_*`` are in section ``cvode``), the cost of one call of the numba
+right-hand side from Python, the same solve's cost per evaluation with a plain-Python oscillator
 (scikit-sundae's own per-callback cost), and the effect of the analytic Jacobian (heyoka's symbolic
-derivative, ``Model.jacobian_into``) against CVODE's internal difference quotients.
+derivative compiled by numba, ``Model.numba_jacobian_into``) against CVODE's internal difference quotients.
 
 Setting: the 3 m laboratory pendulum of ``bench.problems.scenes`` (spherical model, the physical one) over
 ``DURATION_S`` with its 0.45 s output grid, tol = ``TOL``. Timed by the thread's CPU time (every library here
@@ -45,21 +46,13 @@ def _scene_problem(quick: bool):
     return replace(scene, duration_s=duration).problem()
 
 
-def _radial_cvode(t, y, g):
-    g[0] = y[0] * y[2] + y[1] * y[3]
-
-
-_radial_cvode.terminal = [False]
-_radial_cvode.direction = [-1]
-
-
 def bare_cvode(problem, method: str, analytic_jacobian: bool = True) -> Callable[[], Any]:
-    """scikit-sundae's CVODE with the adapter's right-hand side, Jacobian, tolerances, grid and event."""
+    """scikit-sundae's CVODE with the ``cvode_*_py`` adapter's right-hand side, Jacobian, tolerances and grid."""
     from sksundae.cvode import CVODE
 
     p = problem.parameter_vector
     rhs_into = problem.model.numba_rhs_into
-    jacobian_into = problem.model.jacobian_into
+    jacobian_into = problem.model.numba_jacobian_into
 
     def rhs(t, y, yp):
         rhs_into(t, y, yp, p)
@@ -69,8 +62,7 @@ def bare_cvode(problem, method: str, analytic_jacobian: bool = True) -> Callable
 
     tspan = np.union1d([0.0], problem.t_out)
     options = {"method": method, "rtol": TOL, "atol": absolute_tolerance(problem.params, TOL),
-               "max_num_steps": step_budget(problem.params, float(np.max(np.diff(tspan)))),
-               "eventsfn": _radial_cvode, "num_events": 1}
+               "max_num_steps": step_budget(problem.params, float(np.max(np.diff(tspan))))}
     if analytic_jacobian:
         options["jacfn"] = jacobian
     y0 = problem.initial_state
@@ -134,8 +126,8 @@ def _final_state(result: Any) -> np.ndarray:
 
 
 BARE: dict[str, Callable] = {
-    "cvode_adams": lambda problem: bare_cvode(problem, "Adams"),
-    "cvode_bdf": lambda problem: bare_cvode(problem, "BDF"),
+    "cvode_adams_py": lambda problem: bare_cvode(problem, "Adams"),
+    "cvode_bdf_py": lambda problem: bare_cvode(problem, "BDF"),
     "heyoka_taylor": bare_heyoka,
     "scipy_dop853": lambda problem: bare_solve_ivp(problem, "DOP853"),
     "scipy_rk45": lambda problem: bare_solve_ivp(problem, "RK45"),
