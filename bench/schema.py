@@ -54,8 +54,12 @@ COLUMNS: tuple[Column, ...] = (
     Column("energy_drift_per_s", "REAL", "1/s", "least-squares slope of (E − E₀)/(E₀ − E_rest) against t"),
     Column("energy_max_rel_error_steps", "REAL", "", "the same max over every step (streamed; fixed-step runs only)"),
     Column("precession_rate_rad_s", "REAL", "rad/s", "measured swing-plane rate, counter-clockwise about up positive"),
-    Column("precession_rate_error", "REAL", "", "|rate − (−Ω_E sin φ)| / (Ω_E |sin φ|) (÷ Ω_E at the equator)"),
-    Column("precession_rate_ref_error", "REAL", "", "|rate − reference rate| / (Ω_E |sin φ|), the integrator's own error"),
+    Column("precession_rate_error", "REAL", "", "|rate − (−Ω_E sin φ)| / (Ω_E |sin φ|) (÷ Ω_E at the equator): relative to the local rate, large near the equator"),
+    Column("precession_rate_error_rad_s", "REAL", "rad/s", "|rate − (−Ω_E sin φ)|"),
+    Column("precession_rate_error_earth", "REAL", "", "|rate − (−Ω_E sin φ)| / Ω_E: comparable across latitudes (charts and thresholds use it)"),
+    Column("precession_rate_ref_error", "REAL", "", "|rate − reference rate| / (Ω_E |sin φ|), the integrator's own error, relative to the local rate"),
+    Column("precession_rate_ref_error_rad_s", "REAL", "rad/s", "|rate − reference rate|"),
+    Column("precession_rate_ref_error_earth", "REAL", "", "|rate − reference rate| / Ω_E: comparable across latitudes (charts and thresholds use it)"),
     Column("analytic_gap_exact", "REAL", "", "max |r − r_exact linear| / A over the output grid"),
     Column("analytic_gap_seed", "REAL", "", "max |r − r_seed eqs. 14-15| / A over the output grid"),
     Column("reference_error", "REAL", "", "max |r − r_reference| / A over the output grid (real128 heyoka reference)"),
@@ -77,7 +81,11 @@ VERDICT_COLUMNS: tuple[str, ...] = (
     "energy_drift_per_s",
     "energy_max_rel_error_steps",
     "precession_rate_error",
+    "precession_rate_error_rad_s",
+    "precession_rate_error_earth",
     "precession_rate_ref_error",
+    "precession_rate_ref_error_rad_s",
+    "precession_rate_ref_error_earth",
     "analytic_gap_exact",
     "analytic_gap_seed",
     "reference_error",
@@ -96,8 +104,9 @@ DECLARED_FACTS: dict[str, str] = {
 SCHEMA_VERSION = 2
 """Version of ``COLUMNS`` (stored as the database's ``PRAGMA user_version``)."""
 MIGRATIONS: dict[int, str] = {
-    1: "runs lack the declared integrator facts (declared_order, stages, adaptive, stability_limit_kh): "
-       "added as NULL columns, shown as unknown",
+    1: "runs lack the declared integrator facts (declared_order, stages, adaptive, stability_limit_kh) and the "
+       "precession errors in rad/s and relative to Ω_E (precession_rate_error_rad_s, _earth, "
+       "precession_rate_ref_error_rad_s, _earth): added as NULL columns, unknown for the old rows",
 }
 """Older schema version → what a database written under it lacks (the store adds the missing columns)."""
 

@@ -16,7 +16,10 @@ from foucault_bench.integrators.base import (
 from foucault_bench.integrators.fixed_step import FixedStepIntegrator
 from foucault_bench.integrators.registry import REGISTRY, get_integrator, load_plugins, register, unregister
 
-from foucault_bench.integrators import cvode, cvode_py, explicit_euler, heyoka_taylor, rk4, scipy_ivp, symplectic_euler, verlet  # noqa: E402,F401  (registration)
+from foucault_bench.integrators import (  # noqa: E402,F401  (registration)
+    boris, composition6, cvode, cvode_py, dop853, dopri5, explicit_euler, gauss_legendre4, heyoka_taylor,
+    implicit_midpoint, rk4, scipy_ivp, symplectic_euler, tsit5, verlet, yoshida4,
+)
 
 load_plugins()
 

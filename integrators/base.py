@@ -113,9 +113,18 @@ class Integrator(ABC):
         order: classical order of accuracy (``None`` where it varies, e.g. variable-order multistep).
         stages: right-hand-side evaluations per step for fixed-step schemes (``None`` for adaptive ones).
         adaptive: ``True`` if driven by a tolerance, ``False`` if by a step size.
-        stability_limit_kh: largest stable k·h on the undamped oscillator ẍ = −k²x (``None`` if unstable
-            for every h or not applicable).
+        stability_limit_kh: largest stable k·h on the undamped oscillator ẍ = −k²x, i.e. without Earth's
+            rotation (``None`` if unstable for every h or not applicable).
+        symplectic: the one-step map is symplectic in the canonical variables (r, p = v + ω×r) of a Hamiltonian
+            model (checked on the linear model by the test suite: Mᵀ J M = J).
+        volume_preserving: the one-step map preserves phase-space volume (det M = 1); implied by ``symplectic``.
+        conserves_quadratic_invariants: every quadratic invariant of the system is an exact invariant of the
+            one-step map (symplectic Runge–Kutta methods; Hairer, Lubich & Wanner, Thm. IV.2.2), e.g. the linear
+            model's energy, kept to round-off.
         reference: where the method is described.
+
+    ``rotation_growth_per_step`` says what rotation does to a method whose ``stability_limit_kh`` holds only
+    without it.
     """
 
     name: ClassVar[str]
@@ -124,7 +133,16 @@ class Integrator(ABC):
     stages: ClassVar[int | None] = None
     adaptive: ClassVar[bool]
     stability_limit_kh: ClassVar[float | None] = None
+    symplectic: ClassVar[bool] = False
+    volume_preserving: ClassVar[bool] = False
+    conserves_quadratic_invariants: ClassVar[bool] = False
     reference: ClassVar[str]
+
+    def rotation_growth_per_step(self, kh: float, rate_ratio: float) -> float | None:
+        """Per-step growth factor |λ|max of the amplitude on the linear model turning at the vertical rate
+        a = ``rate_ratio``·k, for a method that is unstable at every h once the frame rotates; ``None`` (the
+        default) where rotation only moves the stability limit by O(a/k)."""
+        return None
 
     def solve(self, problem: Problem, *, step_s: float | None = None, tol: float | None = None,
               monitor: bool = True) -> Solution:
@@ -181,6 +199,10 @@ class Integrator(ABC):
             "stages": self.stages,
             "adaptive": self.adaptive,
             "stability_limit_kh": self.stability_limit_kh,
+            "symplectic": self.symplectic,
+            "volume_preserving": self.volume_preserving or self.symplectic,
+            "conserves_quadratic_invariants": self.conserves_quadratic_invariants,
+            "unstable_with_rotation": self.rotation_growth_per_step(1.0, 1e-4) is not None,
             "reference": self.reference,
         }
 

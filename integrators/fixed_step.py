@@ -164,9 +164,14 @@ class FixedStepIntegrator(Integrator):
         the parameter vector, passed by the loop as a tuple of floats; compile it with ``models.jit.jit``)."""
 
     @functools.lru_cache(maxsize=None)
+    def compiled_step(self, model: Model) -> Callable:
+        """``make_step(model)``, built once per model (callable from Python too, e.g. to analyse one step)."""
+        return self.make_step(model)
+
+    @functools.lru_cache(maxsize=None)
     def kernel(self, model: Model) -> Callable:
         """The compiled loop for this scheme and model (compiled on first use, cached on disk by numba)."""
-        return build_kernel(self.make_step(model), model.numba_energy)
+        return build_kernel(self.compiled_step(model), model.numba_energy)
 
     def compile(self, model: Model) -> None:
         """Compile (or load from numba's cache) the loop for ``model`` with a one-step run."""

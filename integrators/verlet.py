@@ -44,6 +44,7 @@ class RotatingVerlet(FixedStepIntegrator):
     order: ClassVar[int] = 2
     stages: ClassVar[int] = 2
     stability_limit_kh: ClassVar[float] = 2.0
+    symplectic: ClassVar[bool] = True
     reference: ClassVar[str] = (
         "Störmer-Verlet + exact rotation (Strang splitting), RATTLE on the sphere; Hairer, Lubich & Wanner, "
         "Geometric Numerical Integration, 2nd ed., §I.3, §II.5, §VII.1.4"

@@ -270,32 +270,41 @@ def long_time_energy(table: pd.DataFrame, stem: Path) -> Path:
 
 
 def stability(table: pd.DataFrame, stem: Path) -> Path:
-    """Max relative energy error after a fixed number of steps against k·h, one panel per fixed-step
-    integrator, with its declared stability limit drawn."""
+    """Max relative energy error over a long run against k·h, one panel per fixed-step integrator, without
+    Earth's rotation (solid) and with it (dashed), with the declared limit (dashed line) and the measured one
+    (triangle on the axis)."""
     integrators = _ordered_integrators(table)
     columns = 2
     rows_of_panels = (len(integrators) + columns - 1) // columns
-    figure = Figure(figsize=(12, 3.6 * rows_of_panels + 0.6), layout="constrained")
-    panels = np.atleast_1d(figure.subplots(rows_of_panels, columns, sharex=True, sharey=True, squeeze=False)).ravel()
+    figure = Figure(figsize=(12, 3.6 * rows_of_panels + 0.8), layout="constrained")
+    # y not shared: a panel whose runs all diverge (explicit Euler) would impose its placeholder limits on all
+    panels = np.atleast_1d(figure.subplots(rows_of_panels, columns, sharex=True, squeeze=False)).ravel()
     for axes, (integrator, family) in zip(panels, integrators):
-        rows = table[table["integrator"] == integrator].sort_values("kh")
         style = integrator_style(integrator, family)
-        x = rows["kh"].to_numpy(dtype=float)
-        y = rows["energy_max_rel_error"].to_numpy(dtype=float)
-        ok = (rows["status"] == STATUS_OK).to_numpy()
-        axes.plot(x[ok], np.maximum(y[ok], LOG_FLOOR), color=style["color"], marker=style["marker"],
-                  markersize=4, linestyle="-")
-        statuses = rows["status"].to_numpy()
-        mark_on_edge(axes, x[statuses == STATUS_DIVERGED], style["color"], DIVERGED_MARKER, "top")
-        mark_on_edge(axes, x[statuses == STATUS_FAILED], style["color"], FAILED_MARKER, "top")
-        limit = float(rows["stability_limit_kh"].iloc[0])
+        for rotation, linestyle in ((False, "-"), (True, "--")):
+            rows = table[(table["integrator"] == integrator) & (table["rotation"] == rotation)].sort_values("kh")
+            if rows.empty:
+                continue
+            x = rows["kh"].to_numpy(dtype=float)
+            y = rows["energy_max_rel_error"].to_numpy(dtype=float)
+            statuses = rows["status"].to_numpy()
+            ok = statuses == STATUS_OK
+            axes.plot(x[ok], np.maximum(y[ok], LOG_FLOOR), color=style["color"], marker=style["marker"],
+                      markersize=3.5, linestyle=linestyle, alpha=1.0 if rotation else 0.6)
+            mark_on_edge(axes, x[statuses == STATUS_DIVERGED], style["color"], DIVERGED_MARKER, "top")
+            mark_on_edge(axes, x[statuses == STATUS_FAILED], style["color"], FAILED_MARKER, "top")
+            measured = float(rows["measured_limit_kh"].iloc[0])
+            if np.isfinite(measured):
+                axes.plot([measured], [0.0], marker="^" if rotation else "v", color="black", markersize=7,
+                          transform=axes.get_xaxis_transform(), clip_on=False, linestyle="none")
+        limit = float(table.loc[table["integrator"] == integrator, "stability_limit_kh"].iloc[0])
         if np.isfinite(limit):
             axes.axvline(limit, color="black", linestyle="--", linewidth=1)
-            axes.axvspan(limit, max(x.max(), limit) * 1.02, color="#d62728", alpha=0.07)
-            axes.text(limit, 0.04, f" theoretical limit kh = {limit:.3g}", transform=axes.get_xaxis_transform(),
+            axes.axvspan(limit, max(table["kh"].max(), limit) * 1.02, color="#d62728", alpha=0.07)
+            axes.text(limit, 0.06, f" declared limit kh = {limit:.4g}", transform=axes.get_xaxis_transform(),
                       fontsize=9)
         else:
-            axes.text(0.02, 0.04, "no stability limit: unstable for every h > 0", transform=axes.transAxes,
+            axes.text(0.02, 0.06, "no declared limit: unstable for every h > 0", transform=axes.transAxes,
                       fontsize=9)
         set_log_scales(axes, x=False)
         axes.set_title(integrator, pad=12)
@@ -307,9 +316,36 @@ def stability(table: pd.DataFrame, stem: Path) -> Path:
     for axes in panels[-columns:]:
         axes.set_xlabel("k·h (step in units of 1/k = √(L/g))")
     first = table.iloc[0]
-    figure.suptitle(f"Stability: {int(first['config_steps'])} steps of the {first['config_model']} model at each k·h "
-                    "(shaded: beyond the theoretical limit)")
-    figure.legend(handles=outcome_legend_handles()[:2], loc="outside lower center", ncols=2, fontsize=9)
+    handles = [Line2D([], [], color="grey", linestyle="-", label="Ω_E = 0 (no rotation)"),
+               Line2D([], [], color="grey", linestyle="--", label=f"Ω_E sidereal, φ = {first['config_latitude_deg']:g}°"),
+               Line2D([], [], color="black", marker="v", linestyle="none", label="measured limit, no rotation"),
+               Line2D([], [], color="black", marker="^", linestyle="none", label="measured limit, rotation")]
+    figure.legend(handles=handles + outcome_legend_handles()[:2], loc="outside lower center", ncols=3, fontsize=9)
+    figure.suptitle(f"Stability: {int(first['config_steps'])} steps of the {first['config_model']} model at each k·h, "
+                    f"L = {first['config_length_m']:g} m")
+    return save(figure, stem)
+
+
+def rotation_growth(table: pd.DataFrame, stem: Path) -> Path:
+    """Per-step growth of the one-step map with Earth's rotation against k·h for the integrators that declare a
+    growth law (unstable at every h once the frame rotates), measured (markers) against the law (line)."""
+    figure = Figure(figsize=(7.5, 4.8), layout="constrained")
+    axes = figure.subplots()
+    rotating = table[table["rotation"] & np.isfinite(table["growth_theory"].to_numpy(dtype=float))]
+    for (integrator, family), rows in rotating.groupby(["integrator", "family"], sort=True):
+        rows = rows.sort_values("kh")
+        style = integrator_style(integrator, family)
+        axes.plot(rows["kh"], rows["growth_theory"], color=style["color"], linestyle="-", linewidth=1.2,
+                  label=f"{integrator}: ½(kh)²(a/k)/√(1 − (kh/2)²)")
+        axes.plot(rows["kh"], rows["growth_per_step"], color=style["color"], marker=style["marker"],
+                  linestyle="none", markersize=5, label=f"{integrator}: measured max |λ| − 1")
+    set_log_scales(axes, x=False)
+    axes.set_xlabel("k·h")
+    axes.set_ylabel("amplitude growth per step")
+    if not rotating.empty:
+        axes.set_title(f"Growth with Earth's rotation (a/k = {rotating['rate_ratio'].iloc[0]:.3g})", pad=10)
+        axes.legend(fontsize=9)
+    axes.grid(True, which="major", alpha=0.3)
     return save(figure, stem)
 
 
@@ -342,6 +378,37 @@ def precession_latitude(table: pd.DataFrame, stem: Path) -> Path:
     first = rows.iloc[0]
     figure.suptitle(f"Precession against latitude: {first['config_model']} model, L = {first['config_length_m']:g} m, "
                     f"A = {first['config_amplitude_m']:g} m, {first['config_duration_s'] / 3600:g} h per latitude")
+    return save(figure, stem)
+
+
+def release_azimuth(table: pd.DataFrame, stem: Path) -> Path:
+    """Precession-rate error (relative to Ω_E) against the release azimuth, one panel per latitude, one line per
+    integrator (log scale)."""
+    latitudes = sorted(table["latitude_deg"].unique(), reverse=True)
+    figure = Figure(figsize=(12, 4.6), layout="constrained")
+    panels = np.atleast_1d(figure.subplots(1, len(latitudes), sharey=True, squeeze=False)).ravel()
+    handles = {}
+    for axes, latitude in zip(panels, latitudes):
+        rows = table[table["latitude_deg"] == latitude]
+        for (integrator, family), sweep in rows.groupby(["integrator", "family"], sort=True):
+            sweep = sweep.sort_values("release_azimuth_deg")
+            style = integrator_style(integrator, family)
+            ok = (sweep["status"] == STATUS_OK).to_numpy()
+            (line,) = axes.plot(sweep["release_azimuth_deg"].to_numpy()[ok],
+                                np.maximum(sweep["error_earth"].to_numpy(dtype=float)[ok], LOG_FLOOR),
+                                color=style["color"], marker=style["marker"], markersize=4, label=integrator)
+            handles[integrator] = line
+        set_log_scales(axes, x=False)
+        axes.set_xticks(np.arange(0, 181, 45))
+        axes.set_xlabel("release azimuth (° from South towards East)")
+        axes.set_title(f"φ = {latitude:g}°", pad=10)
+        axes.grid(True, which="major", alpha=0.3)
+    panels[0].set_ylabel("|rate − reference rate| / Ω_E")
+    figure.legend(handles=list(handles.values()), loc="outside right upper", fontsize=9)
+    first = table.iloc[0]
+    figure.suptitle(f"Precession error against release direction (0° = North-South swing, 90° = East-West): "
+                    f"{first['config_model']} model, L = {first['config_length_m']:g} m, "
+                    f"A = {first['config_amplitude_m']:g} m, kh = {first['kh']:g}, {first['config_duration_s']:g} s")
     return save(figure, stem)
 
 

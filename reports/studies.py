@@ -7,10 +7,14 @@ stored tables and computes the missing ones.
 
 * ``long_time_energy``: relative energy error against time for one representative per integrator family
   (Euler grows, RK4 drifts, Verlet stays bounded, CVODE/heyoka near round-off).
-* ``stability_sweep``: max relative energy error over a fixed number of steps against k·h for every
-  fixed-step integrator, across its declared ``stability_limit_kh``.
+* ``stability_sweep``: long runs and the one-step map's growth against k·h for every fixed-step integrator,
+  with and without Earth's rotation: the measured stability limit beside the declared one, and the growth per
+  step where rotation destabilises a method (symplectic Euler) beside its theory.
 * ``precession_vs_latitude``: the swing plane's measured rate for many latitudes at once (one heyoka
   ``taylor_adaptive_batch``, one batch element per latitude), against −Ω_E sin φ and its Airy correction.
+* ``precession_vs_release_azimuth``: each structure-preserving integrator's precession error against the
+  direction of release, at a mid-latitude and near the equator (an East release hides what a North-South one
+  shows).
 * ``seed_revisited``: the numbers behind the seed note's figures and their corrections (``reports.seed``).
 
 All runs go through the suite's own models and integrator registry; nothing here re-implements an equation of
@@ -30,8 +34,9 @@ from tqdm import tqdm
 from foucault_bench.bench.problems.scenes import SEED_EARTH_RATE_RAD_S
 from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.schema import setting_label
-from foucault_bench.bench.verdicts.columns import energy_scale, energy_verdicts
-from foucault_bench.bench.verdicts.turning_points import precession_rate
+from foucault_bench.bench.verdicts.columns import energy_scale, energy_verdicts, released_from_rest
+from foucault_bench.bench.verdicts.stability import measured_stability_limit, spectral_growth, step_matrix
+from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
 from foucault_bench.integrators import STATUS_OK, Problem, Solution, get_integrator
 from foucault_bench.integrators.registry import REGISTRY
 from foucault_bench.models import Model, PendulumParameters, get_model
@@ -142,48 +147,67 @@ def long_time_energy(config: LongTimeEnergyConfig = LongTimeEnergyConfig(), prog
 # --------------------------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class StabilitySweepConfig:
-    """Every registered fixed-step integrator on the linear model, ``steps`` steps at each k·h of ``kh``.
+    """Every registered fixed-step integrator on the linear model at each k·h of ``kh``, without Earth's rotation
+    (Ω_E = 0: the undamped oscillator that defines ``stability_limit_kh``) and with it (Ω_E sidereal at
+    ``latitude_deg``).
 
-    The linear model is the oscillator whose eigenvalues ±ik define ``stability_limit_kh`` (PHYSICS.md
-    "Integrators"); its Coriolis term shifts them by a/k ≈ 1e-4 only.
+    Two measurements per point: a long run of ``steps`` steps (its max energy error and whether it diverged),
+    and the growth per step of the scheme's own one-step map (``bench.verdicts.stability``), from which the
+    measured limit is bisected to ``limit_resolution_kh``.
     """
 
     model: str = "linear"
     length_m: float = 10.0
     latitude_deg: float = 48.846
     amplitude_m: float = 1.0
-    steps: int = 1000
-    kh: tuple[float, ...] = tuple(np.round(np.linspace(0.1, 4.0, 40), 6))
+    steps: int = 20_000
+    kh: tuple[float, ...] = (0.01, 0.02, 0.05, *np.round(np.linspace(0.1, 4.0, 40), 6))
+    limit_resolution_kh: float = 1e-4
 
 
 def stability_sweep(config: StabilitySweepConfig = StabilitySweepConfig(), progress: bool = True) -> pd.DataFrame:
-    """Max relative energy error |E − E₀|/E_swing over every step (streamed by the fixed-step loop, scaled as in
-    ``bench.verdicts.columns.energy_verdicts``) after ``steps`` steps, per integrator and k·h.
+    """Long runs and one-step growth across each fixed-step integrator's stability limit, with and without
+    Earth's rotation.
 
-    Columns: integrator, family, stability_limit_kh (NaN when unstable for every h), kh, steps_done,
-    energy_max_rel_error, status, message, plus the config's scalars.
+    Columns: integrator, family, rotation (bool), rate_ratio (a/k with a = Ω_E sin φ; 0 without rotation),
+    stability_limit_kh (declared, NaN when unstable for every h), measured_limit_kh (NaN when the step grows at
+    every k·h of the grid), kh, steps_done, energy_max_rel_error (max |E − E₀|/E_swing over the run's steps, as
+    in ``bench.verdicts.columns.energy_verdicts``), growth_per_step (measured: max |λ| − 1 of the one-step map),
+    growth_theory (``Integrator.rotation_growth_per_step`` − 1 where the method declares one, else NaN),
+    status, message, plus the config's scalars.
     """
     model = get_model(config.model)
-    params = PendulumParameters(length_m=config.length_m, latitude_deg=config.latitude_deg,
-                                amplitude_m=config.amplitude_m)
-    k = params.pendulum_frequency_rad_s
     fixed_step = sorted(name for name, integrator in REGISTRY.items() if not integrator.adaptive)
+    cases = [(name, rotation) for name in fixed_step for rotation in (False, True)]
     rows = []
-    for name, kh in _progress([(n, kh) for n in fixed_step for kh in config.kh], "stability sweep", progress):
+    for name, rotation in _progress(cases, "stability sweep", progress):
         integrator = REGISTRY[name]
-        step_s = kh / k
-        problem = Problem(model=model, params=params, t_out=np.linspace(0.0, config.steps * step_s, 11))
-        solution = integrator.solve(problem, step_s=step_s)
-        rows.append({
-            "integrator": name,
-            "family": integrator.family,
-            "stability_limit_kh": np.nan if integrator.stability_limit_kh is None else integrator.stability_limit_kh,
-            "kh": float(kh),
-            "steps_done": solution.steps,
-            "energy_max_rel_error": energy_verdicts(model, params, solution)["energy_max_rel_error_steps"],
-            "status": solution.status,
-            "message": solution.message,
-        })
+        params = PendulumParameters(length_m=config.length_m, latitude_deg=config.latitude_deg,
+                                    amplitude_m=config.amplitude_m,
+                                    earth_rate_rad_s=SIDEREAL_EARTH_RATE_RAD_S if rotation else 0.0)
+        k = params.pendulum_frequency_rad_s
+        rate_ratio = params.vertical_rate_rad_s / k
+        measured = measured_stability_limit(integrator, params, np.asarray(config.kh), config.limit_resolution_kh)
+        for kh in config.kh:
+            step_s = float(kh) / k
+            problem = Problem(model=model, params=params, t_out=np.linspace(0.0, config.steps * step_s, 11))
+            solution = integrator.solve(problem, step_s=step_s)
+            theory = integrator.rotation_growth_per_step(float(kh), rate_ratio) if rotation else None
+            rows.append({
+                "integrator": name,
+                "family": integrator.family,
+                "rotation": rotation,
+                "rate_ratio": rate_ratio,
+                "stability_limit_kh": np.nan if integrator.stability_limit_kh is None else integrator.stability_limit_kh,
+                "measured_limit_kh": measured,
+                "kh": float(kh),
+                "steps_done": solution.steps,
+                "energy_max_rel_error": energy_verdicts(model, params, solution)["energy_max_rel_error_steps"],
+                "growth_per_step": spectral_growth(step_matrix(integrator, params, step_s)),
+                "growth_theory": np.nan if theory is None else theory - 1.0,
+                "status": solution.status,
+                "message": solution.message,
+            })
     return _with_config_columns(pd.DataFrame(rows), config, exclude=("kh",))
 
 
@@ -256,6 +280,77 @@ def precession_vs_latitude(config: PrecessionLatitudeConfig = PrecessionLatitude
             "turning_points": len(points),
         })
     return _with_config_columns(pd.DataFrame(rows), config, exclude=())
+
+
+# --------------------------------------------------------------------------------------------------------------
+# precession error against the release azimuth
+# --------------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ReleaseAzimuthConfig:
+    """The 3 m pendulum (spherical model, θ₀ = 0.05) released at each azimuth of ``azimuths_deg`` (from South
+    towards East) at each latitude of ``latitudes_deg``, for ``duration_s``, sampled every ``output_interval_s``;
+    every integrator of ``integrators`` at k·h = ``kh``, against heyoka at tolerance ``reference_tol``."""
+
+    model: str = "spherical"
+    length_m: float = 3.0
+    amplitude_m: float = 0.15
+    latitudes_deg: tuple[float, ...] = (40.44, -0.18)
+    azimuths_deg: tuple[float, ...] = tuple(float(a) for a in range(0, 181, 15))
+    duration_s: float = 600.0
+    output_interval_s: float = 0.45
+    kh: float = 0.1
+    integrators: tuple[str, ...] = ("verlet", "yoshida4", "composition6", "implicit_midpoint", "gauss_legendre4",
+                                    "boris", "rk4")
+    reference_integrator: str = "heyoka_taylor"
+    reference_tol: float = 1e-15
+
+
+def grid_precession_rate(model: Model, params: PendulumParameters, solution: Solution) -> float:
+    """The swing-plane rate (rad/s) measured from ``solution``'s output grid by the suite's one procedure
+    (``bench.verdicts.turning_points``); NaN unless the run is ok."""
+    if solution.status != STATUS_OK:
+        return math.nan
+    points = turning_points_from_grid(solution.t, solution.y, grid_accelerations(model, params, solution.y),
+                                      released_from_rest(params))
+    return precession_rate(points)[0]
+
+
+def precession_vs_release_azimuth(config: ReleaseAzimuthConfig = ReleaseAzimuthConfig(),
+                                  progress: bool = True) -> pd.DataFrame:
+    """Precession-rate error of each integrator against the release azimuth: the swing's direction relative
+    to the horizontal part of ω matters to integrators whose error is not isotropic (Verlet on the sphere: about
+    0.09·θ₀ cos φ·Ω_E·(kh)² for a North-South release, ~100× less for an East one).
+
+    Columns: latitude_deg, release_azimuth_deg, integrator, family, kh, rate_rad_s, reference_rate_rad_s,
+    error_earth (|rate − reference rate|/Ω_E, comparable across latitudes), status, message, plus the config's
+    scalars.
+    """
+    model = get_model(config.model)
+    t_out = config.output_interval_s * np.arange(round(config.duration_s / config.output_interval_s) + 1)
+    cases = [(lat, az) for lat in config.latitudes_deg for az in config.azimuths_deg]
+    rows = []
+    for latitude, azimuth in _progress(cases, "precession vs release azimuth", progress):
+        params = PendulumParameters(length_m=config.length_m, latitude_deg=latitude, amplitude_m=config.amplitude_m,
+                                    release_azimuth_deg=azimuth)
+        problem = Problem(model=model, params=params, t_out=t_out)
+        reference = solve_with_setting(config.reference_integrator, problem, config.reference_tol)
+        reference_rate = grid_precession_rate(model, params, reference)
+        for name in config.integrators:
+            solution = solve_with_setting(name, problem, config.kh)
+            rate = grid_precession_rate(model, params, solution)
+            rows.append({
+                "latitude_deg": latitude,
+                "release_azimuth_deg": azimuth,
+                "integrator": name,
+                "family": family_of(name),
+                "kh": config.kh,
+                "rate_rad_s": rate,
+                "reference_rate_rad_s": reference_rate,
+                "error_earth": abs(rate - reference_rate) / params.earth_rate_rad_s,
+                "status": solution.status,
+                "message": solution.message,
+            })
+    return _with_config_columns(pd.DataFrame(rows), config, exclude=("latitudes_deg", "azimuths_deg", "integrators"))
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -435,6 +530,7 @@ STUDIES: dict[str, Study] = {
         Study("study_long_time_energy", long_time_energy, LongTimeEnergyConfig()),
         Study("study_stability", stability_sweep, StabilitySweepConfig()),
         Study("study_precession_latitude", precession_vs_latitude, PrecessionLatitudeConfig()),
+        Study("study_release_azimuth", precession_vs_release_azimuth, ReleaseAzimuthConfig()),
     )
 }
 
@@ -471,7 +567,7 @@ def _with_config_columns(frame: pd.DataFrame, config: object, exclude: tuple[str
 
 
 __all__ = [
-    "LongTimeEnergyConfig", "PrecessionLatitudeConfig", "STUDIES", "SeedConfig", "SeedStudy",
+    "LongTimeEnergyConfig", "PrecessionLatitudeConfig", "ReleaseAzimuthConfig", "STUDIES", "SeedConfig", "SeedStudy",
     "StabilitySweepConfig", "Study", "ensure_studies", "long_time_energy", "precession_vs_latitude",
-    "relative_energy_error", "seed_revisited", "solve_with_setting", "stability_sweep",
+    "precession_vs_release_azimuth", "relative_energy_error", "seed_revisited", "solve_with_setting", "stability_sweep",
 ]

@@ -35,7 +35,11 @@ def problems_of(name: str, mapping: dict) -> list[str]:
 
 
 def test_the_built_in_scenes_are_the_ones_promised() -> None:
-    assert set(REAL_PENDULUMS) | {"airy_3m", "seed_2min"} == set(SCENES)
+    north_south = {"lab_3m_ns", "quito_3m_ns"}
+    assert set(REAL_PENDULUMS) | {"airy_3m", "seed_2min"} | north_south == set(SCENES)
+    for name in north_south:  # released towards the South, on the model that has the horizontal part of ω
+        assert SCENES[name].params.release_azimuth_deg == 0.0 and SCENES[name].model == "spherical"
+    assert abs(SCENES["quito_3m_ns"].params.latitude_deg) < 1.0 < SCENES["lab_3m_ns"].params.latitude_deg
     assert SCENES["seed_2min"].model == "linear" and SCENES["airy_3m"].model == "spherical"
     assert SCENES["seed_2min"].params.earth_rate_rad_s == pytest.approx(2 * math.pi / 86400, rel=1e-15)
     assert SCENES["seed_2min"].duration_s == 120.0

@@ -33,7 +33,8 @@ def shortened(scene: Scene, duration_s: float) -> Scene:
 
 def measurement_bound(scene: Scene, turning_times_s: np.ndarray) -> float:
     """Worst-case error (rad/s) of a rate measured on the scene's grid (bench.verdicts.turning_points.azimuth_error_bound)."""
-    return rate_error_bound(turning_times_s, azimuth_error_bound(scene.params, scene.output_interval_s))
+    return rate_error_bound(turning_times_s, azimuth_error_bound(scene.params, scene.output_interval_s,
+                                                                 scene.duration_s))
 
 
 # --- the measurement --------------------------------------------------------------------------------------------
@@ -70,14 +71,19 @@ def test_turning_points_of_the_sampled_exact_linear_solution_give_the_textbook_r
     big_omega = math.hypot(params.pendulum_frequency_rad_s, a)
     # the exact turning points are t = nπ/Ω, n = 0, 1, … (models.analytic), each on azimuth ψ₀ − a t (mod π)
     assert points.shape[0] == math.floor(t[-1] * big_omega / math.pi) + 1
-    time_bound = turning_time_error_bound(params, scene.output_interval_s)
+    time_bound = turning_time_error_bound(params, scene.output_interval_s, scene.duration_s)
     assert np.max(np.abs(points[:, 0] - np.pi / big_omega * np.arange(points.shape[0]))) <= time_bound
-    azimuth_bound = azimuth_error_bound(params, scene.output_interval_s)
+    azimuth_bound = azimuth_error_bound(params, scene.output_interval_s, scene.duration_s)
     measured = np.arctan2(points[:, 2], points[:, 1])
     textbook = np.radians(params.release_azimuth_deg) - a * points[:, 0]
     assert np.max(np.abs(np.angle(np.exp(2j * (measured - textbook))) / 2)) <= azimuth_bound
     rate, _ = precession_rate(points)
     assert abs(rate - params.textbook_precession_rate_rad_s) <= measurement_bound(scene, points[:, 0])
+
+
+HEYOKA_EVENT_TIME_TOLERANCE_S = 1e-10
+"""heyoka locates an event as a root of its step's Taylor polynomial: here within 8e-12 s of the grid measurement
+(measured), except the last event, which falls in the step cut short by the end of the run (4.3e-10 s)."""
 
 
 def test_grid_turning_points_agree_with_heyoka_event_turning_points() -> None:
@@ -89,11 +95,16 @@ def test_grid_turning_points_agree_with_heyoka_event_turning_points() -> None:
                                       grid_accelerations(scene.model_object, scene.params, solution.y), True)
     assert np.array_equal(points[0], [0.0, *scene.params.initial_state()[:2]])
     assert events.shape == points[1:].shape
-    time_bound = turning_time_error_bound(scene.params, scene.output_interval_s)
-    assert np.max(np.abs(events[:, 0] - points[1:, 0])) <= time_bound
+    time_bound = turning_time_error_bound(scene.params, scene.output_interval_s, scene.duration_s)
+    gap = np.abs(events[:, 0] - points[1:, 0])
+    assert np.max(gap[:-1]) <= time_bound + HEYOKA_EVENT_TIME_TOLERANCE_S
+    assert gap[-1] <= time_bound + 10 * HEYOKA_EVENT_TIME_TOLERANCE_S
     azimuth_gap = np.angle(np.exp(2j * (np.arctan2(events[:, 2], events[:, 1])
                                         - np.arctan2(points[1:, 2], points[1:, 1])))) / 2
-    assert np.max(np.abs(azimuth_gap)) <= azimuth_error_bound(scene.params, scene.output_interval_s)
+    speed = scene.params.amplitude_m * scene.params.pendulum_frequency_rad_s  # bounds the tangential motion rate
+    azimuth_tolerance = 10 * HEYOKA_EVENT_TIME_TOLERANCE_S * speed / scene.params.amplitude_m
+    assert np.max(np.abs(azimuth_gap)) <= (azimuth_error_bound(scene.params, scene.output_interval_s, scene.duration_s)
+                                           + azimuth_tolerance)
 
 
 # --- the references' rates --------------------------------------------------------------------------------------

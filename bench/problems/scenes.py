@@ -388,6 +388,41 @@ def _builtin_scenes() -> dict[str, Scene]:
                         "30 min (≈ 516 periods); output every 0.45 s.",
         ),
         Scene(
+            name="lab_3m_ns",
+            title="3 m laboratory pendulum released North-South (40.44° N)",
+            model="spherical",
+            params=PendulumParameters(length_m=3.0, latitude_deg=40.44, amplitude_m=0.15, release_azimuth_deg=0.0),
+            duration_s=1800.0,
+            output_interval_s=0.45,
+            why_model=_spherical_why(0.15 / 3.0, "9.76°/h clockwise", 0.005 / 9.76)
+            + " Released towards the South, the swing feels the horizontal part of ω along its own line: the "
+              "release-side term ≈ ¼θ₀³ cot φ cos ψ, absent for an East release, is largest here, and only the "
+              "spherical model has it.",
+            source="arXiv:0902.1829: L = 3 m, period 3.47 s, 40.44° N, 9.76°/h clockwise; the release direction "
+                   "is this scene's.",
+            assumptions="amplitude 0.15 m (θ₀ = 0.05, not sourced); released from rest towards the South "
+                        "(azimuth 0°), where integrators whose error depends on the direction of the swing "
+                        "relative to ω show it (an East release hides it); 30 min; output every 0.45 s.",
+        ),
+        Scene(
+            name="quito_3m_ns",
+            title="3 m pendulum at Quito's latitude (0.18° S), released North-South",
+            model="spherical",
+            params=PendulumParameters(length_m=3.0, latitude_deg=-0.18, amplitude_m=0.15, release_azimuth_deg=0.0),
+            duration_s=1800.0,
+            output_interval_s=0.45,
+            why_model="Near the equator the vertical rate Ω_E sin φ nearly vanishes (0.047°/h here) while the "
+                      "horizontal part of ω is almost all of Ω_E: what turns the swing is dominated by terms the "
+                      "planar models do not have (the release-side term, the Airy precession of a Coriolis-made "
+                      "ellipse). Only the spherical model with the full ω has them.",
+            source="hypothetical: the 3 m pendulum of arXiv:0902.1829 moved to the latitude of Quito, Ecuador "
+                   "(about 0.18° S).",
+            assumptions="amplitude 0.15 m (θ₀ = 0.05); released from rest towards the South (azimuth 0°); no "
+                        "sourced pendulum swings here: the scene shows what rate errors relative to the local "
+                        "rate do near the equator (use precession errors relative to Ω_E to compare scenes); "
+                        "30 min; output every 0.45 s.",
+        ),
+        Scene(
             name="seed_2min",
             title="The seed note's setting: the first 2 minutes, ω = 2π/24 h (linear model)",
             model="linear",
@@ -401,8 +436,13 @@ def _builtin_scenes() -> dict[str, Scene]:
             source="Seed note §3 (eqs. 6-7, 14-15: 'los primeros 2 mins') and §2 (ω = 2π/24 h = 7.3e-5 rad/s).",
             assumptions="the seed states no length, latitude or amplitude ('datos realistas'): assumed the "
                         "Panthéon's L = 67 m at 48.846° N with y₀ = 0.5 m, released from rest at x = 0, y = y₀ as "
-                        f"in the seed, which makes the East-West drift x reach ≈ 3 mm in 2 min (the seed: 'del "
-                        f"orden de milímetros'); sidereal Ω_E would be {SIDEREAL_EARTH_RATE_RAD_S:.7e} rad/s.",
+                        f"in the seed, which makes the North-South drift x (x points South) reach ≈ 3 mm in 2 min (the "
+                        f"seed: 'del orden de milímetros'); sidereal Ω_E would be {SIDEREAL_EARTH_RATE_RAD_S:.7e} "
+                        "rad/s. The command `foucault-bench seed`, which redraws the note's own figures, assumes "
+                        "L = 10 m at 45° instead (reports.studies.SeedConfig): there its "
+                        "Euler run's failure shows within the 2 minutes; this scene puts the note's question on a "
+                        "documented pendulum, like every other scene, and the drift scale y₀ω t cos λ is the same "
+                        "3 mm in both.",
         ),
     ]
     return {scene.name: scene for scene in scenes}

@@ -10,6 +10,8 @@ A matrix file (read with ``tomllib``) looks like this (README "Benchmark matrice
     tol = [1e-6, 1e-9]                    # adaptive sweep: tolerance handed to the integrator as ``tol``
     plugins = ["my_package.my_integrator"]  # modules imported first (they register integrators)
 
+    release_azimuth_deg = [0, 45, 90]     # optional: every scene once per release azimuth (scene "NAME-az45")
+
     [scene.lab]                           # an inline scene, read by bench.problems.scenes.scene_from_mapping
     model = "linear"
     ...
@@ -45,8 +47,8 @@ from foucault_bench.bench.run.timing import TimingPolicy
 from foucault_bench.bench.schema import declared_facts, setting_label
 from foucault_bench.bench.validation import built_in_names, finite_number, is_number, read_toml, suggestion
 
-TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "integrators", "kh", "tol", "override", "plugins",
-                  "timing")
+TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "release_azimuth_deg", "integrators", "kh", "tol",
+                  "override", "plugins", "timing")
 SETTING_KEYS = ("kh", "tol")
 TIMING_KEYS = tuple(field.name for field in dataclasses.fields(TimingPolicy))
 BUILT_IN_FOLDER = "matrices"
@@ -142,7 +144,7 @@ def parse_matrix(document: dict[str, Any], *, source: str = "matrix", default_na
         except Exception as error:  # any import failure of user code is a problem to report, not a crash
             problem(f"plugins: cannot import {module_name!r}: {type(error).__name__}: {error}")
 
-    scenes = _scenes(document, problem)
+    scenes = _release_azimuth_variants(_scenes(document, problem), document.get("release_azimuth_deg"), problem)
     timing = _timing(document.get("timing", {}), problem)
     runs = _runs(document, scenes, plugins, timing, problem)
     if problems:
@@ -199,6 +201,29 @@ def _scenes(document: dict[str, Any], problem) -> list[Scene]:
     if not document.get("scenes") and not inline:
         problem("no scenes: list built-in ones in scenes = [...] or define [scene.NAME] tables")
     return scenes
+
+
+def _release_azimuth_variants(scenes: list[Scene], azimuths: Any, problem) -> list[Scene]:
+    """With ``release_azimuth_deg = [ψ₁, ψ₂, …]``, every scene once per release azimuth (degrees from x = South
+    towards y = East), named ``SCENE-azψ``; without it, the scenes as they are."""
+    if azimuths is None:
+        return scenes
+    if (not isinstance(azimuths, list) or not azimuths
+            or not all(isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+                       for value in azimuths)):
+        problem(f"release_azimuth_deg must be a non-empty list of finite numbers (degrees), got {azimuths!r}")
+        return scenes
+    if len(set(azimuths)) != len(azimuths):
+        problem("release_azimuth_deg: an azimuth is listed more than once")
+    return [
+        dataclasses.replace(
+            scene, name=f"{scene.name}-az{azimuth:g}", title=f"{scene.title}, released at azimuth {azimuth:g}°",
+            params=dataclasses.replace(scene.params, release_azimuth_deg=float(azimuth)),
+            assumptions=f"{scene.assumptions} Release azimuth swept by the matrix: {azimuth:g}° from South "
+                        "towards East.".strip(),
+        )
+        for scene in scenes for azimuth in azimuths
+    ]
 
 
 def _timing(table: Any, problem) -> TimingPolicy:

@@ -109,11 +109,27 @@ VERDICT_KEYS = (
     "energy_max_rel_error_steps",
     "precession_rate_rad_s",
     "precession_rate_error",
+    "precession_rate_error_rad_s",
+    "precession_rate_error_earth",
     "precession_rate_ref_error",
+    "precession_rate_ref_error_rad_s",
+    "precession_rate_ref_error_earth",
     "analytic_gap_exact",
     "analytic_gap_seed",
     "reference_error",
 )
+
+
+def rate_errors(prefix: str, error_rad_s: float, params: PendulumParameters) -> dict[str, float]:
+    """A precession-rate error three ways: relative to the local rate Ω_E|sin φ| (``prefix``; it grows without
+    bound towards the equator, where the rate vanishes), in rad/s, and relative to Ω_E (``_earth``: the one that
+    compares across latitudes; NaN without rotation)."""
+    earth = params.earth_rate_rad_s
+    return {
+        prefix: error_rad_s / rate_scale(params),
+        f"{prefix}_rad_s": error_rad_s,
+        f"{prefix}_earth": error_rad_s / earth if earth > 0 else NAN,
+    }
 
 
 def compute_verdicts(scene: "Scene", solution: Solution, reference: "Reference | None") -> dict[str, Any]:
@@ -148,13 +164,11 @@ def compute_verdicts(scene: "Scene", solution: Solution, reference: "Reference |
     if solution.status == STATUS_OK:
         points = turning_points_from_grid(t, y, grid_accelerations(model, params, y), released_from_rest(params))
         rate, stderr = precession_rate(points)
-        scale = rate_scale(params)
-        verdicts.update(
-            precession_rate_rad_s=rate,
-            precession_rate_stderr_rad_s=stderr,
-            turning_points=int(points.shape[0]),
-            precession_rate_error=abs(rate - params.textbook_precession_rate_rad_s) / scale,
-        )
+        verdicts.update(precession_rate_rad_s=rate, precession_rate_stderr_rad_s=stderr,
+                        turning_points=int(points.shape[0]))
+        verdicts.update(rate_errors("precession_rate_error", abs(rate - params.textbook_precession_rate_rad_s),
+                                    params))
         if reference is not None:
-            verdicts["precession_rate_ref_error"] = abs(rate - reference.precession_rate_rad_s) / scale
+            verdicts.update(rate_errors("precession_rate_ref_error", abs(rate - reference.precession_rate_rad_s),
+                                        params))
     return verdicts

@@ -8,10 +8,11 @@ fitted by a straight line in t. The same procedure serves every integrator and t
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
-from scipy.interpolate import BPoly
+from numpy.polynomial import chebyshev
 from scipy.optimize.elementwise import find_root
 
 from foucault_bench.models import Model, PendulumParameters
@@ -34,18 +35,24 @@ def grid_accelerations(model: Model, params: PendulumParameters, y: np.ndarray) 
     return np.array([acceleration(row[0], row[1], row[2], row[3], p) for row in y], dtype=np.float64).reshape(-1, 2)
 
 
+HERMITE_NODES = 6
+"""Grid points each local interpolant uses, 3 on each side of the interval that holds the turning point."""
+
+
 def turning_points_from_grid(t: np.ndarray, y: np.ndarray, accelerations: np.ndarray,
                              include_release: bool) -> np.ndarray:
-    """Turning points (maxima of the radius |r|) of a trajectory sampled on a grid: array (n, 3) of (t, x, y).
+    """Turning points (maxima of the radius |r|) of a trajectory sampled on a uniform grid: array (n, 3) of
+    (t, x, y).
 
-    Between grid points the trajectory is the quintic Hermite interpolant of position, velocity and
-    acceleration (``quintic_hermite``; Hermite interpolation, e.g. Burden & Faires, Numerical Analysis, §3.4).
     A maximum of the radius lies in every grid interval where r·ṙ changes sign from + to − (this needs an
-    output interval below a quarter period; ``bench.problems.scenes`` enforces a fifth);
-    its time is the root of r·ṙ of the interpolant there (Chandrupatla's bracketing method,
-    ``scipy.optimize.elementwise.find_root``), solved in the time offset from the interval's start so that the
-    tolerance does not grow with t. ``include_release`` prepends (0, x₀, y₀): a release from rest is a turning
-    point. Rows of ``y`` after the first non-finite one are ignored.
+    output interval below a quarter period; ``bench.problems.scenes`` enforces a fifth). Around each such
+    interval the trajectory is the Hermite interpolant of position, velocity and acceleration at the
+    ``HERMITE_NODES`` nearest grid points (``local_hermite``: degree 17, interpolation error ∝ (ΩΔ)¹⁸/18!, below
+    round-off on every built-in scene; Burden & Faires, Numerical Analysis, §3.4), and the turning point is the
+    root of r·ṙ of that interpolant (Chandrupatla's bracketing method, ``scipy.optimize.elementwise.find_root``),
+    solved in the offset from the interval's start so that the tolerance does not grow with t.
+    ``include_release`` prepends (0, x₀, y₀): a release from rest is a turning point. Rows of ``y`` after the
+    first non-finite one are ignored.
     """
     n = finite_prefix(y)
     t, y, accelerations = t[:n], y[:n], accelerations[:n]
@@ -57,45 +64,92 @@ def turning_points_from_grid(t: np.ndarray, y: np.ndarray, accelerations: np.nda
     start = np.nonzero((radial[:-1] > 0.0) & (radial[1:] <= 0.0))[0]
     if start.size == 0:
         return release_rows
-    position = quintic_hermite(t, y[:, :2], y[:, 2:4], accelerations)
-    velocity = position.derivative()
-    t0 = t[start]
-
-    def radial_velocity(offset: np.ndarray, origin: np.ndarray) -> np.ndarray:
-        when = origin + offset
-        return np.sum(position(when) * velocity(when), axis=-1)
-
-    offset = t[start + 1] - t0  # where r·ṙ is exactly 0 at the grid point, that point is the turning point
+    spacing = t[1] - t[0]
+    if not np.allclose(np.diff(t), spacing, rtol=1e-9, atol=0.0):
+        raise ValueError("turning points are located on a uniform output grid")
+    nodes = min(HERMITE_NODES, n)
+    # the window of ``nodes`` grid points around each interval, shifted inwards at the ends of the grid
+    first = np.clip(start - (nodes // 2 - 1), 0, n - nodes)
+    when = t[start + 1].copy()  # where r·ṙ is exactly 0 at the grid point, that point is the turning point
+    where = y[start + 1, :2].copy()
     bracketed = radial[start + 1] != 0.0
-    if np.any(bracketed):
-        roots = find_root(radial_velocity, (np.zeros(int(bracketed.sum())), offset[bracketed]), args=(t0[bracketed],))
-        offset[bracketed] = roots.x
-    when = t0 + offset
-    return np.vstack([release_rows, np.column_stack([when, position(when)])])
+    for shift in np.unique(start - first):
+        group = np.nonzero(bracketed & (start - first == shift))[0]
+        if group.size == 0:
+            continue
+        rows = first[group][:, None] + np.arange(nodes)
+        interpolant = local_hermite(nodes, int(shift), spacing, y[rows, :2], y[rows, 2:4], accelerations[rows])
+        roots = find_root(interpolant.radial_velocity, (np.zeros(group.size), np.ones(group.size)),
+                          args=(np.arange(group.size),))
+        when[group] = t[start[group]] + roots.x * spacing
+        where[group] = interpolant.position(roots.x)
+    return np.vstack([release_rows, np.column_stack([when, where])])
 
 
-def quintic_hermite(t: np.ndarray, position: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray) -> BPoly:
-    """The piecewise quintic matching position, velocity and acceleration at every grid time, as a ``BPoly``.
+class LocalHermite:
+    """Hermite interpolants of many windows at once, as Chebyshev series in x ∈ [−1, 1] over each window;
+    evaluated at ``offset`` ∈ [0, 1], the fraction of the grid interval that starts at the window's node
+    ``shift``."""
 
-    Bernstein coefficients of the quintic on [t_i, t_i + h] follow from the end-point derivatives of a Bézier
-    curve, B'(0) = 5(b₁ − b₀)/h and B''(0) = 20(b₂ − 2b₁ + b₀)/h², and symmetrically at the right end
-    (Farin, Curves and Surfaces for CAGD, 5th ed., §5.3): b₀ = p₀, b₁ = p₀ + hv₀/5, b₂ = p₀ + 2hv₀/5 + h²a₀/20,
-    b₃ = p₁ − 2hv₁/5 + h²a₁/20, b₄ = p₁ − hv₁/5, b₅ = p₁. The same interpolant as
-    ``BPoly.from_derivatives``, built in one vectorised step instead of a Python loop over the intervals.
-    """
-    h = np.diff(t)[:, None]
-    p0, p1 = position[:-1], position[1:]
-    v0, v1 = velocity[:-1], velocity[1:]
-    a0, a1 = acceleration[:-1], acceleration[1:]
-    coefficients = np.stack([
-        p0,
-        p0 + h * v0 / 5.0,
-        p0 + 2.0 * h * v0 / 5.0 + h * h * a0 / 20.0,
-        p1 - 2.0 * h * v1 / 5.0 + h * h * a1 / 20.0,
-        p1 - h * v1 / 5.0,
-        p1,
-    ])
-    return BPoly(coefficients, t)
+    def __init__(self, coefficients: np.ndarray, nodes: int, shift: int) -> None:
+        self.coefficients = coefficients  # (degree + 1, windows, 2)
+        self.derivative = chebyshev.chebder(coefficients)
+        self.half_width = 0.5 * (nodes - 1)
+        self.centre = self.half_width - shift
+
+    def _x(self, offset: np.ndarray) -> np.ndarray:
+        return (offset - self.centre) / self.half_width
+
+    def position(self, offset: np.ndarray) -> np.ndarray:
+        x = self._x(np.asarray(offset, dtype=np.float64))
+        return np.stack([chebyshev.chebval(x, self.coefficients[:, :, axis], tensor=False) for axis in (0, 1)],
+                        axis=-1)
+
+    def radial_velocity(self, offset: np.ndarray, window: np.ndarray) -> np.ndarray:
+        """r·dr/dx of the interpolant of each ``window`` (index) at its ``offset``: the sign and the root of r·ṙ
+        (the root finder passes the windows it is still working on)."""
+        x = self._x(np.asarray(offset, dtype=np.float64))
+        position = [chebyshev.chebval(x, self.coefficients[:, window, axis], tensor=False) for axis in (0, 1)]
+        slope = [chebyshev.chebval(x, self.derivative[:, window, axis], tensor=False) for axis in (0, 1)]
+        return position[0] * slope[0] + position[1] * slope[1]
+
+
+@functools.lru_cache(maxsize=None)
+def _hermite_system(nodes: int) -> np.ndarray:
+    """Inverse of the confluent Chebyshev–Vandermonde matrix of ``nodes`` equispaced nodes on [−1, 1] (rows 3j,
+    3j + 1, 3j + 2: T_k, T_k′ and T_k″ at node j, k = 0 … 3·nodes − 1), in extended precision (``np.longdouble``).
+
+    The matrix is ill-conditioned (2.5e5 for 6 nodes): an inverse rounded to double carries relative errors of
+    that times ε, which turn into noise of ~1e-11 of the amplitude on the interpolant. It is therefore inverted
+    with 40 significant digits (mpmath) and applied in extended precision, which leaves the interpolant within a
+    few ε of the data's own round-off."""
+    import mpmath
+
+    size = 3 * nodes
+    with mpmath.workdps(40):
+        x = [mpmath.mpf(2 * j) / (nodes - 1) - 1 for j in range(nodes)]
+        matrix = mpmath.matrix(size, size)
+        for k in range(size):
+            power_series = chebyshev.cheb2poly(np.eye(size)[k])  # integer coefficients, exact in double
+            for order in range(3):
+                coefficients = [int(c) for c in np.polynomial.polynomial.polyder(power_series, order)]
+                for j, node in enumerate(x):
+                    matrix[3 * j + order, k] = mpmath.polyval(coefficients[::-1], node)
+        inverse = matrix**-1
+        return np.array([[np.longdouble(mpmath.nstr(inverse[i, j], 30)) for j in range(size)] for i in range(size)],
+                        dtype=np.longdouble)
+
+
+def local_hermite(nodes: int, shift: int, spacing_s: float, position: np.ndarray, velocity: np.ndarray,
+                  acceleration: np.ndarray) -> LocalHermite:
+    """The Hermite interpolants through ``position``, ``velocity`` and ``acceleration`` (each (windows, nodes,
+    2)) at ``nodes`` equispaced grid points ``spacing_s`` apart; with x = (u − centre)/half-width in grid units
+    u, d/dx = half-width·Δ·d/dt."""
+    scale = 0.5 * (nodes - 1) * spacing_s
+    data = np.stack([position, scale * velocity, scale * scale * acceleration], axis=2)  # (windows, nodes, 3, 2)
+    data = data.reshape(data.shape[0], 3 * nodes, 2)
+    coefficients = np.einsum("kc,wcd->kwd", _hermite_system(nodes), data.astype(np.longdouble))
+    return LocalHermite(coefficients.astype(np.float64), nodes, shift)
 
 
 def least_squares_slope(x: np.ndarray, y: np.ndarray) -> float:
@@ -105,12 +159,25 @@ def least_squares_slope(x: np.ndarray, y: np.ndarray) -> float:
     return float(np.dot(x_centred, np.asarray(y, dtype=np.float64) - np.mean(y))) / spread if spread > 0 else NAN
 
 
+def unwrapped_azimuth(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Azimuths ψ (rad) of the points (x, y) of a swing, continuous modulo π: ψ₀ = atan2(y₀, x₀) plus half the
+    running sum of the doubled-angle turns arg((x_k + iy_k)²·conj((x_{k−1} + iy_{k−1})²)).
+
+    Summing the small turns keeps the round-off at a few ε of the total turn. Unwrapping 2·atan2 instead adds
+    a multiple of the rounded 2π at every branch-cut crossing, and a swing released East or West (2ψ ≈ ±π)
+    crosses the cut at nearly every turning point: after n points that error is ~n·ε·π (6e-14 rad after 500).
+    """
+    doubled = (np.asarray(x, dtype=np.float64) + 1j * np.asarray(y, dtype=np.float64)) ** 2
+    turns = np.angle(doubled[1:] * np.conj(doubled[:-1]))
+    return math.atan2(float(y[0]), float(x[0])) + 0.5 * np.concatenate([[0.0], np.cumsum(turns)])
+
+
 def precession_rate(turning_points: np.ndarray) -> tuple[float, float]:
     """Swing-plane rate (rad/s, counter-clockwise about up positive) and its standard error, from turning points.
 
     ψ = atan2(y, x) of each turning point (the frame is x South, y East, z Up, so ψ grows counter-clockwise
-    seen from above); consecutive turning points lie at opposite ends of the swing, ψ and ψ + π, so 2ψ is
-    unwrapped and halved; the rate is the least-squares slope of ψ against t, computed on centred data, with
+    seen from above); consecutive turning points lie at opposite ends of the swing, ψ and ψ + π, so ψ is
+    followed modulo π (``unwrapped_azimuth``); the rate is the least-squares slope of ψ against t, computed on centred data, with
     the usual standard error √(Σ residual² / (N − 2) / Σ(t − t̄)²) (e.g. NIST/SEMATECH e-Handbook of
     Statistical Methods, §4.1.4.1; PHYSICS.md "Measuring the precession rate"). NaN with fewer than 3 points.
     """
@@ -118,7 +185,7 @@ def precession_rate(turning_points: np.ndarray) -> tuple[float, float]:
     if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] < 3:
         return NAN, NAN
     t = points[:, 0]
-    azimuth = 0.5 * np.unwrap(2.0 * np.arctan2(points[:, 2], points[:, 1]))
+    azimuth = unwrapped_azimuth(points[:, 1], points[:, 2])
     slope = least_squares_slope(t, azimuth)
     if math.isnan(slope):
         return NAN, NAN
@@ -128,36 +195,58 @@ def precession_rate(turning_points: np.ndarray) -> tuple[float, float]:
     return slope, stderr
 
 
-HERMITE_ERROR_WEIGHT = 1.0 / (720.0 * 64.0)
-"""max of θ³(1−θ)³/6! on [0, 1]: the quintic Hermite error is f⁽⁶⁾(ξ)·θ³(1−θ)³Δ⁶/6! (Burden & Faires §3.4)."""
-HERMITE_ERROR_SLOPE_WEIGHT = 3.0 / (25.0 * math.sqrt(5.0)) / 720.0
-"""max |d/dθ θ³(1−θ)³| / 6!: with u = θ(1−θ) the derivative is 3u²√(1−4u), largest at u = 1/5: 3/(25√5) ≈ 0.0537."""
+def _node_polynomial_maxima(nodes: int) -> tuple[float, float]:
+    """max over every window shift and every u in the interval [0, 1] of |W(u)| and |W′(u)|, W(u) = Π (u − u_j)³
+    over the window's nodes u_j (grid units): the node factor of the Hermite error f⁽³ⁿ⁾(ξ)·W(u)Δ³ⁿ/(3n)!."""
+    u = np.linspace(0.0, 1.0, 2001)
+    largest, steepest = 0.0, 0.0
+    for shift in range(nodes - 1):
+        polynomial = np.polynomial.Polynomial.fromroots(np.repeat(np.arange(nodes) - shift, 3))
+        largest = max(largest, float(np.max(np.abs(polynomial(u)))))
+        steepest = max(steepest, float(np.max(np.abs(polynomial.deriv()(u)))))
+    return largest, steepest
 
 
-def turning_time_error_bound(params: PendulumParameters, output_interval_s: float) -> float:
-    """Bound (s) on the error of a turning point's time located on the grid (linear model, release at rest).
+_W_MAX, _W_SLOPE_MAX = _node_polynomial_maxima(HERMITE_NODES)
+HERMITE_ORDER = 3 * HERMITE_NODES
+"""The local interpolant matches 3·nodes conditions: its error is f⁽¹⁸⁾(ξ)·W(u)Δ¹⁸/18! (Burden & Faires §3.4)."""
+HERMITE_ERROR_WEIGHT = _W_MAX / math.factorial(HERMITE_ORDER)
+HERMITE_ERROR_SLOPE_WEIGHT = _W_SLOPE_MAX / math.factorial(HERMITE_ORDER)
+TIME_ROUNDOFF = 16.0 * np.finfo(np.float64).eps
+"""Round-off of a located time relative to the time itself: t is a double (ε·t) and the root is found to a
+few ε of the grid interval; 16ε leaves a margin of about 4 over the largest error measured on the scenes."""
+AZIMUTH_ROUNDOFF_RAD = 64.0 * np.finfo(np.float64).eps
+"""Round-off of a turning point's azimuth: the interpolant's value (a Chebyshev sum of 18 terms) and atan2."""
 
-    The radial part of the quintic Hermite error, ≤ Ω⁶AΔ⁶θ³(1−θ)³/6!, has a slope ≤ Ω⁶AΔ⁵·0.0537/6! that moves
-    the maximum of the radius, whose curvature is Ω²A, by δ ≤ 0.0537·Ω⁴Δ⁵/6!.
+
+def turning_time_error_bound(params: PendulumParameters, output_interval_s: float, duration_s: float = 0.0) -> float:
+    """Bound (s) on the error of a turning point's time located on the grid (linear model, release at rest),
+    up to ``duration_s``.
+
+    The radial part of the Hermite error, ≤ Ω¹⁸AΔ¹⁸|W(u)|/18!, has a slope ≤ Ω¹⁸AΔ¹⁷|W′|/18! that moves the
+    maximum of the radius, whose curvature is Ω²A, by δ ≤ |W′|·Ω¹⁶Δ¹⁷/18!; round-off adds ``TIME_ROUNDOFF``·t.
     """
     big_omega = math.hypot(params.pendulum_frequency_rad_s, params.vertical_rate_rad_s)
-    return HERMITE_ERROR_SLOPE_WEIGHT * big_omega**4 * output_interval_s**5
+    interpolation = HERMITE_ERROR_SLOPE_WEIGHT * big_omega ** (HERMITE_ORDER - 2) * output_interval_s ** (HERMITE_ORDER - 1)
+    return interpolation + TIME_ROUNDOFF * (duration_s + output_interval_s)
 
 
-def azimuth_error_bound(params: PendulumParameters, output_interval_s: float) -> float:
+def azimuth_error_bound(params: PendulumParameters, output_interval_s: float, duration_s: float = 0.0) -> float:
     """Bound (rad) on the azimuth error of one turning point located on the grid, linear model, release at rest.
 
     The exact motion is z = e^{−iat} w with w = A(c₊e^{iΩs} + c₋e^{−iΩs}), c± = (1 ± a/Ω)/2 (``models.analytic``),
-    so z⁽⁶⁾ = e^{−iat}(d/dt − ia)⁶ w. Two effects move the measured azimuth: (i) the tangential part of the
-    interpolation error: |Im (d/dt − ia)⁶ w| = A|sin Ωs|·|c₊(Ω−a)⁶ − c₋(Ω+a)⁶| ≈ 5aΩ⁵A|sin Ωs|, bounded here
-    by 7aΩ⁵A, gives 7(a/Ω)(ΩΔ)⁶/(6!·64); (ii) the time error δ of ``turning_time_error_bound``: the azimuth is
-    stationary at a turning point, so the pair (t + δ, ψ) sits a·δ off the line ψ₀ − a t. The bound is their
-    sum; for small swings of the other models it holds to leading order.
+    so z⁽ⁿ⁾ = e^{−iat}(d/dt − ia)ⁿ w, n = 18. Three effects move the measured azimuth: (i) the tangential part of
+    the interpolation error: |Im (d/dt − ia)ⁿ w| = A|sin Ωs|·|c₊(Ω−a)ⁿ − c₋(Ω+a)ⁿ| ≈ (n − 1)aΩⁿ⁻¹A|sin Ωs|,
+    bounded here by (n + 1)aΩⁿ⁻¹A, gives (n + 1)(a/Ω)(ΩΔ)ⁿ|W|/n!; (ii) the time error δ of
+    ``turning_time_error_bound``: the azimuth is stationary at a turning point, so the pair (t + δ, ψ) sits a·δ
+    off the line ψ₀ − a t; (iii) round-off, ``AZIMUTH_ROUNDOFF_RAD``. The bound is their sum; for small swings of
+    the other models it holds to leading order.
     """
     a = abs(params.vertical_rate_rad_s)
     big_omega = math.hypot(params.pendulum_frequency_rad_s, a)
-    tangential = 7.0 * (a / big_omega) * (big_omega * output_interval_s) ** 6 * HERMITE_ERROR_WEIGHT
-    return tangential + a * turning_time_error_bound(params, output_interval_s)
+    tangential = ((HERMITE_ORDER + 1) * (a / big_omega) * (big_omega * output_interval_s) ** HERMITE_ORDER
+                  * HERMITE_ERROR_WEIGHT)
+    return tangential + a * turning_time_error_bound(params, output_interval_s, duration_s) + AZIMUTH_ROUNDOFF_RAD
 
 
 def rate_error_bound(turning_times_s: np.ndarray, azimuth_error_rad: float) -> float:
@@ -168,6 +257,18 @@ def rate_error_bound(turning_times_s: np.ndarray, azimuth_error_rad: float) -> f
     """
     t_centred = np.asarray(turning_times_s, dtype=np.float64) - np.mean(turning_times_s)
     return azimuth_error_rad * float(np.sum(np.abs(t_centred))) / float(np.dot(t_centred, t_centred))
+
+
+def rate_measurement_floor(params: PendulumParameters, output_interval_s: float, duration_s: float) -> float:
+    """Worst-case error (rad/s) of a precession rate measured on a grid of spacing ``output_interval_s`` over
+    ``duration_s`` from an exact trajectory: ``rate_error_bound`` of ``azimuth_error_bound`` at the turning
+    points of a swing released from rest (every half period π/Ω). Below this, a rate error is the measurement's,
+    not the integrator's."""
+    big_omega = math.hypot(params.pendulum_frequency_rad_s, params.vertical_rate_rad_s)
+    times = np.arange(0.0, duration_s, math.pi / big_omega)
+    if times.size < 3:
+        return NAN
+    return rate_error_bound(times, azimuth_error_bound(params, output_interval_s, duration_s))
 
 
 def rate_scale(params: PendulumParameters) -> float:

@@ -1,0 +1,124 @@
+"""Composition methods: a symmetric second-order step Φ_h composed as Φ_{γ_s h} ∘ … ∘ Φ_{γ_1 h}.
+
+A composition is data: the weights γ_1 … γ_s (``Composition``), checked when it is built. For a symmetric base
+method of order 2 and symmetric weights (γ_i = γ_{s+1−i}) the composition is symmetric, so only even orders
+occur, and it has order
+
+* 2 when Σ γ_i = 1 (consistency),
+* 4 when moreover Σ γ_i³ = 0,
+* 6 when moreover Σ γ_i⁵ = 0 and one more condition holds that couples the weights (it is not a power sum;
+  Hairer, Lubich & Wanner, Geometric Numerical Integration, 2nd ed., §V.3.2, eq. (3.8) and Table V.3.1).
+
+``Composition`` checks symmetry and the power-sum conditions (necessary for the declared order); the observed
+order of every composition is measured by the test suite like any other integrator's. The composition of
+symplectic maps is symplectic, so a composition of the rotating-frame Verlet step (``integrators.verlet``) is
+symplectic, symmetric and of the declared order (Yoshida, Phys. Lett. A 150, 262 (1990); Suzuki, Phys. Lett.
+A 146, 319 (1990)).
+
+On the undamped oscillator each Verlet sub-step with step γh is the 2×2 map M(γkh) with trace 2 − (γkh)²; the
+composition is stable while |trace Π M(γ_i kh)| < 2. ``oscillator_stability_limit`` finds the first kh where
+that fails, which is the limit each composition declares.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, ClassVar
+
+import numpy as np
+
+from foucault_bench.integrators.fixed_step import FixedStepIntegrator
+from foucault_bench.integrators.verlet import RotatingVerlet
+from foucault_bench.models import Model
+from foucault_bench.models.jit import jit
+
+POWER_SUM_TOLERANCE = 1e-14
+"""How far from zero the power sums Σγ³, Σγ⁵ (and from one Σγ) may be: a few ulp of the largest term."""
+
+
+@dataclass(frozen=True)
+class Composition:
+    """Symmetric weights γ_1 … γ_s of a composition of a symmetric second-order step, and its order.
+
+    Raises ``ValueError`` at construction when the weights are not symmetric, do not sum to one, or violate a
+    power-sum condition the declared order needs (Σγ³ = 0 for order ≥ 4, Σγ⁵ = 0 for order ≥ 6).
+    """
+
+    weights: tuple[float, ...]
+    order: int
+
+    def __post_init__(self) -> None:
+        gamma = np.asarray(self.weights, dtype=np.float64)
+        scale = float(np.max(np.abs(gamma)))
+        if self.order not in (2, 4, 6):
+            raise ValueError(f"order must be 2, 4 or 6, got {self.order}")
+        if not np.array_equal(gamma, gamma[::-1]):
+            raise ValueError("weights must be symmetric (γ_i = γ_(s+1-i))")
+        if abs(gamma.sum() - 1.0) > POWER_SUM_TOLERANCE * gamma.size:
+            raise ValueError(f"weights must sum to 1, sum to {gamma.sum()!r}")
+        for power in range(3, self.order, 2):
+            residual = float(np.sum(gamma**power))
+            if abs(residual) > POWER_SUM_TOLERANCE * gamma.size * scale**power:
+                raise ValueError(f"order {self.order} needs Σγ^{power} = 0, got {residual:.3e}")
+
+    @property
+    def stages(self) -> int:
+        return len(self.weights)
+
+    def oscillator_stability_limit(self, *, kh_max: float = 10.0, resolution: float = 1e-10) -> float:
+        """The smallest kh at which the composition of Verlet steps becomes unstable on ẍ = −k²x (first kh
+        with |trace| ≥ 2 of the product of the sub-steps' matrices), by a scan then bisection."""
+
+        def half_trace(kh: float) -> float:
+            product = np.eye(2)
+            for gamma in self.weights:
+                s = gamma * kh  # Verlet on (x, v/k): kick, drift, kick with step s
+                product = np.array([[1.0 - 0.5 * s * s, s], [-s * (1.0 - 0.25 * s * s), 1.0 - 0.5 * s * s]]) @ product
+            return 0.5 * float(np.trace(product))
+
+        grid = np.arange(1, int(kh_max / 1e-3) + 1) * 1e-3
+        unstable = next(kh for kh in grid if abs(half_trace(kh)) >= 1.0)
+        low, high = unstable - 1e-3, unstable
+        while high - low > resolution:
+            middle = 0.5 * (low + high)
+            low, high = (low, middle) if abs(half_trace(middle)) >= 1.0 else (middle, high)
+        return low
+
+
+def compose(step: Callable, weights: tuple[float, ...]) -> Callable:
+    """A numba step ``(x, y, vx, vy, h, p)`` applying ``step`` with the sub-steps γ_i h in turn."""
+
+    @jit
+    def composed(x, y, vx, vy, h, p):
+        for gamma in weights:
+            x, y, vx, vy = step(x, y, vx, vy, gamma * h, p)
+        return x, y, vx, vy
+
+    return composed
+
+
+class VerletComposition(FixedStepIntegrator):
+    """Base of the compositions of the rotating-frame Verlet step: a subclass declares ``composition``."""
+
+    family: ClassVar[str] = "symplectic-composition"
+    symplectic: ClassVar[bool] = True
+    composition: ClassVar[Composition]
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        if "composition" in cls.__dict__:
+            cls.order = cls.composition.order
+            cls.stages = RotatingVerlet.stages * cls.composition.stages
+            cls.stability_limit_kh = cls.composition.oscillator_stability_limit()
+
+    def make_step(self, model: Model) -> Callable:
+        return compose(RotatingVerlet().make_step(model), tuple(float(g) for g in self.composition.weights))
+
+
+def triple_jump(order: int) -> Composition:
+    """Yoshida's triple jump raising a symmetric method of order ``order`` − 2 to ``order``:
+    γ_1 = γ_3 = 1/(2 − 2^{1/(order−1)}), γ_2 = 1 − 2γ_1 (Yoshida 1990, eq. (4.14); HLW eq. (V.3.5))."""
+    root = 2.0 ** (1.0 / (order - 1))
+    outer = 1.0 / (2.0 - root)
+    return Composition(weights=(outer, 1.0 - 2.0 * outer, outer), order=order)
+

@@ -1,0 +1,151 @@
+"""The compiled embedded Runge-Kutta driver against scipy: ``dopri5`` and ``dop853`` take the steps of
+``scipy_rk45`` and ``scipy_dop853`` (same accepted steps, same right-hand-side evaluations) on every built-in
+scene, and give the same output states and turning points: bit for bit where numpy's BLAS sums its small matrix
+products in the order the driver reproduces (OpenBLAS on x86-64, probed here), to round-off elsewhere.
+
+Runs are short (``SHORT_INTERVALS`` output intervals of each scene, 2-3 swings) except the Panthéon at tol 1e-8,
+run in full (1 h). The full check over every scene and every default-matrix tolerance is described in
+integrators/README.md ("Compiled embedded Runge-Kutta pairs").
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from foucault_bench.bench.problems.scenes import SCENES
+from foucault_bench.integrators import Solution, get_integrator
+
+PAIRS = {"dopri5": "scipy_rk45", "dop853": "scipy_dop853"}
+SHORT_INTERVALS = 20
+TOLERANCES = (1e-4, 1e-8, 1e-12)
+ROUND_OFF_RTOL = 1e-12
+"""|Δy| / max|y| allowed between the two runs' outputs where numpy's BLAS sums in another order (the same
+polynomials of the same steps summed differently: a few ulp per step, 1e-12 leaves a margin of ~100)."""
+
+
+def _fma(x: float, y: float, z: float) -> float:
+    return float(Fraction(x) * Fraction(y) + Fraction(z))
+
+
+@functools.cache
+def numpy_sums_like_the_driver() -> bool:
+    """Whether numpy's small matrix products sum as the driver does (integrators/embedded_rk.py): a matrix
+    times a vector from a transposed (column-major) matrix in blocks of four as two fused multiply-add chains,
+    4 × 4 times a vector as (q₀p₀ + q₂p₂) + (q₁p₁ + q₃p₃), a matrix times a matrix as one fused chain in order.
+    Probed on random data with exact fused multiply-adds."""
+    rng = np.random.default_rng(0)
+    for n_terms in (4, 7, 13):
+        k, w = rng.standard_normal((n_terms, 4)), rng.standard_normal(n_terms)
+        for column in range(4):
+            total, j = 0.0, 0
+            for _ in range(n_terms // 4):
+                even = _fma(k[j + 2, column], w[j + 2], k[j, column] * w[j])
+                odd = _fma(k[j + 3, column], w[j + 3], k[j + 1, column] * w[j + 1])
+                total, j = total + (even + odd), j + 4
+            if n_terms % 4 >= 2:
+                total, j = total + (k[j, column] * w[j] + k[j + 1, column] * w[j + 1]), j + 2
+            if n_terms % 2:
+                total += k[j, column] * w[j]
+            if total != np.dot(k.T, w)[column]:
+                return False
+    q, p, m = rng.standard_normal((4, 4)), rng.standard_normal(4), rng.standard_normal((4, 3))
+    for row in range(4):
+        if (q[row, 0] * p[0] + q[row, 2] * p[2]) + (q[row, 1] * p[1] + q[row, 3] * p[3]) != np.dot(q, p)[row]:
+            return False
+        for column in range(3):
+            total = 0.0
+            for j in range(4):
+                total = _fma(q[row, j], m[j, column], total)
+            if total != np.dot(q, m)[row, column]:
+                return False
+    return True
+
+
+@functools.cache
+def run(name: str, scene_name: str, tol: float, full: bool = False) -> Solution:
+    scene = SCENES[scene_name]
+    if not full:
+        scene = dataclasses.replace(scene, duration_s=SHORT_INTERVALS * scene.output_interval_s)
+    return get_integrator(name).solve(scene.problem(), tol=tol)
+
+
+def assert_same_steps(mine: Solution, theirs: Solution) -> None:
+    assert mine.status == theirs.status == "ok", (mine.message, theirs.message)
+    assert (mine.nfev, mine.steps) == (theirs.nfev, theirs.steps)
+    found, expected = mine.streamed.turning_points, theirs.streamed.turning_points
+    if numpy_sums_like_the_driver():
+        np.testing.assert_array_equal(mine.y, theirs.y)
+        np.testing.assert_array_equal(found, expected)
+    else:
+        scale = np.max(np.abs(theirs.y))
+        assert np.max(np.abs(mine.y - theirs.y)) <= ROUND_OFF_RTOL * scale
+        assert found.shape == expected.shape
+        assert np.max(np.abs(found - expected), initial=0.0) <= ROUND_OFF_RTOL * max(scale, expected[-1, 0])
+
+
+@pytest.mark.parametrize("tol", TOLERANCES)
+@pytest.mark.parametrize("scene_name", sorted(SCENES))
+@pytest.mark.parametrize("name", sorted(PAIRS))
+def test_same_steps_as_scipy_on_every_built_in_scene(name: str, scene_name: str, tol: float) -> None:
+    assert_same_steps(run(name, scene_name, tol), run(PAIRS[name], scene_name, tol))
+
+
+@pytest.mark.parametrize("name", sorted(PAIRS))
+def test_exactly_the_same_steps_as_scipy_on_the_full_pantheon(name: str) -> None:
+    assert_same_steps(run(name, "pantheon", 1e-8, True), run(PAIRS[name], "pantheon", 1e-8, True))
+
+
+@pytest.mark.parametrize("name", ["dopri5", "tsit5", "dop853"])
+def test_counters_add_up(name: str) -> None:
+    """nfev = 2 (f(t₀, y₀) and the initial-step probe) + s per attempt (+ DOP853's 3 dense-output stages per
+    step holding an output time or a turning point)."""
+    solution = run(name, "lab_3m", 1e-8)
+    tableau = type(get_integrator(name)).tableau
+    attempts = solution.steps + solution.rejected_steps
+    base = 2 + tableau.stages * attempts
+    if tableau.extra_stages == 0:
+        assert solution.nfev == base
+    else:
+        dense_steps = (solution.nfev - base) / tableau.extra_stages
+        assert dense_steps == int(dense_steps) and SHORT_INTERVALS <= dense_steps <= solution.steps
+
+
+def test_rejections_are_counted_as_scipy_makes_them() -> None:
+    """scipy's RK45 makes (nfev − 2)/6 attempts; those not accepted are its rejections (3 on the 3 m Airy
+    pendulum at tol 1e-4: a finite swing of θ₀ = 0.15 rad)."""
+    mine, theirs = run("dopri5", "airy_3m", 1e-4), run("scipy_rk45", "airy_3m", 1e-4)
+    assert mine.rejected_steps == (theirs.nfev - 2) // 6 - theirs.steps >= 1
+
+
+@pytest.mark.parametrize("name", ["dopri5", "dop853", "tsit5"])
+def test_declares_a_compiled_cost_basis(name: str) -> None:
+    assert get_integrator(name).cost_basis == "compiled"
+
+
+def test_the_perf_section_times_only_pairs_that_take_the_same_steps(monkeypatch: pytest.MonkeyPatch) -> None:
+    from foucault_bench.bench.perf import erk
+
+    monkeypatch.setattr(erk, "PAIRS", {"tsit5": "scipy_rk45"})
+    with pytest.raises(AssertionError, match="different steps"):
+        erk.measure(quick=True)
+
+
+@pytest.mark.parametrize("name", sorted(PAIRS))
+def test_a_failing_run_fails_where_scipy_fails(name: str) -> None:
+    """The finite-time blow-up of tests/test_adaptive.py: the step size collapses at the same step, after the same
+    evaluations, with scipy's message."""
+    from test_adaptive import BLOW_UP, BLOW_UP_SCENE
+
+    from foucault_bench.integrators import Problem
+
+    problem = Problem(BLOW_UP, BLOW_UP_SCENE, np.linspace(0.0, 3.0, 31))
+    mine, theirs = get_integrator(name).solve(problem, tol=1e-8), get_integrator(PAIRS[name]).solve(problem, tol=1e-8)
+    assert mine.status == theirs.status == "failed"
+    assert (mine.nfev, mine.steps) == (theirs.nfev, theirs.steps)
+    assert "Required step size is less than spacing between numbers" in mine.message
+    np.testing.assert_array_equal(np.isnan(mine.y), np.isnan(theirs.y))

@@ -1,0 +1,138 @@
+"""Geometric properties that integrators declare, checked on their own compiled step (one test each, over every
+integrator that declares the property, with a negative control that must fail the same check).
+
+On the linear model each fixed-step scheme is a linear map M of (x, y, ẋ, ẏ) (``bench.verdicts.stability``):
+
+* ``symplectic``: M in canonical variables (r, p = v + a ẑ×r) satisfies Mᵀ J M = J (Hairer, Lubich & Wanner,
+  Geometric Numerical Integration, 2nd ed., Def. VI.2.2);
+* ``volume_preserving``: det M = 1;
+* ``conserves_quadratic_invariants``: the linear model's energy ½|v|² + ½k²|r|² (quadratic; the Coriolis force
+  does no work) is kept to round-off over a long run;
+* ``stability_limit_kh``: the one-step map stops growing exactly there without rotation;
+* ``rotation_growth_per_step``: the measured growth with rotation follows the declared law.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from foucault_bench.bench.verdicts.stability import (
+    measured_stability_limit,
+    spectral_growth,
+    step_matrix,
+    symplecticity_defect,
+    volume_defect,
+)
+from foucault_bench.integrators import Problem, get_integrator
+from foucault_bench.integrators.composition import Composition, triple_jump
+from foucault_bench.integrators.registry import REGISTRY
+from foucault_bench.models import MODELS, PendulumParameters
+
+PARIS_10M = PendulumParameters(length_m=10.0, latitude_deg=48.846, amplitude_m=1.0)
+NO_ROTATION = PendulumParameters(length_m=10.0, latitude_deg=48.846, amplitude_m=1.0, earth_rate_rad_s=0.0)
+FIXED_STEP = sorted(name for name, integrator in REGISTRY.items() if not integrator.adaptive)
+ROUND_OFF = 1e-12
+"""Defects of an exact property: entries of M are O(1) and carry ~1e-15 round-off (the implicit schemes ~1e-14
+from their solve), so 1e-12 is a margin of 100–1000."""
+
+
+def _declaring(attribute: str) -> list[str]:
+    return [name for name in FIXED_STEP if getattr(REGISTRY[name], attribute)]
+
+
+def _matrix(name: str, kh: float, params: PendulumParameters = PARIS_10M) -> np.ndarray:
+    return step_matrix(REGISTRY[name], params, kh / params.pendulum_frequency_rad_s)
+
+
+def _safe_kh(name: str) -> list[float]:
+    """Two step sizes inside the declared stability limit (or 0.5 and 1 where none is declared)."""
+    limit = REGISTRY[name].stability_limit_kh or 2.0
+    return [0.25 * limit, 0.6 * limit]
+
+
+@pytest.mark.parametrize("name", _declaring("symplectic"))
+def test_declared_symplectic_step_maps_are_symplectic(name: str) -> None:
+    for kh in _safe_kh(name):
+        assert symplecticity_defect(_matrix(name, kh), PARIS_10M) < ROUND_OFF, kh
+
+
+@pytest.mark.parametrize("name", sorted(set(_declaring("volume_preserving")) | set(_declaring("symplectic"))))
+def test_declared_volume_preserving_step_maps_keep_volume(name: str) -> None:
+    for kh in _safe_kh(name):
+        assert volume_defect(_matrix(name, kh)) < ROUND_OFF, kh
+
+
+def test_the_checks_reject_a_method_without_the_property() -> None:
+    """RK4 is neither symplectic nor volume-preserving: |R(ikh)|² = 1 − (kh)⁶/72 + (kh)⁸/576 per mode, so
+    det M − 1 ≈ −4·(kh)⁶/72 ≈ −2e-3 at kh = 0.6 and the symplectic defect is of the same size."""
+    matrix = _matrix("rk4", 0.6)
+    assert symplecticity_defect(matrix, PARIS_10M) > 1e-4
+    assert volume_defect(matrix) > 1e-4
+
+
+@pytest.mark.parametrize("name", _declaring("conserves_quadratic_invariants"))
+def test_quadratic_invariant_kept_to_round_off_over_a_long_run(name: str) -> None:
+    """20 000 steps at kh = 0.5: what is left is round-off, at most a few ε per step accumulating linearly (the
+    solve stops within half an ulp of its fixed point; Brouwer's law needs compensated sums to do better):
+    bound 4ε per step, 1.8e-11; measured 1e-12 to 3.5e-12. Any truncation error is far above it."""
+    steps = 20_000
+    h = 0.5 / PARIS_10M.pendulum_frequency_rad_s
+    problem = Problem(MODELS["linear"], PARIS_10M, np.linspace(0.0, steps * h, 11))
+    solution = get_integrator(name).solve(problem, step_s=h)
+    assert solution.status == "ok"
+    assert solution.streamed.energy_max_rel_error < 4 * np.finfo(np.float64).eps * steps
+    # the control: Verlet (symplectic, not quadratic-invariant-preserving for this energy) oscillates at O((kh)²)
+    verlet = get_integrator("verlet").solve(problem, step_s=h)
+    assert verlet.streamed.energy_max_rel_error > 1e-3
+
+
+@pytest.mark.parametrize("name", [n for n in FIXED_STEP if REGISTRY[n].stability_limit_kh is not None])
+def test_measured_stability_limit_is_the_declared_one(name: str) -> None:
+    declared = REGISTRY[name].stability_limit_kh
+    grid = np.round(np.arange(0.1, 4.05, 0.1), 6)
+    measured = measured_stability_limit(REGISTRY[name], NO_ROTATION, grid, resolution_kh=1e-5)
+    # 1e-3: the implicit schemes' solve stops certifying convergence 4e-4 below its limit (integrators.gauss)
+    assert measured == pytest.approx(declared, rel=1e-3)
+
+
+@pytest.mark.parametrize("name", [n for n in FIXED_STEP if REGISTRY[n].rotation_growth_per_step(1.0, 1e-4)])
+def test_growth_with_rotation_follows_the_declared_law(name: str) -> None:
+    """Within 10 % (the law is first order in ah; measured agreement ~1e-4), at every k·h below the limit."""
+    rate_ratio = PARIS_10M.vertical_rate_rad_s / PARIS_10M.pendulum_frequency_rad_s
+    for kh in (0.1, 0.5, 1.0, 1.5, 1.9):
+        expected = REGISTRY[name].rotation_growth_per_step(kh, rate_ratio) - 1.0
+        assert spectral_growth(_matrix(name, kh)) == pytest.approx(expected, rel=0.1), kh
+        assert spectral_growth(_matrix(name, kh, NO_ROTATION)) < ROUND_OFF
+
+
+def test_symplectic_euler_diverges_with_rotation_when_its_growth_law_says() -> None:
+    """At kh = 1.96 (L = 10 m, Paris) the growing mode takes ln(R/A₀)/ln g steps to carry the bob from its
+    amplitude share A₀ ≈ A/2 to the divergence radius R = 1000 L; without rotation it stays bounded."""
+    kh = 1.96
+    h = kh / PARIS_10M.pendulum_frequency_rad_s
+    rate_ratio = PARIS_10M.vertical_rate_rad_s / PARIS_10M.pendulum_frequency_rad_s
+    growth = get_integrator("symplectic_euler").rotation_growth_per_step(kh, rate_ratio)
+    predicted = math.log(1000 * PARIS_10M.length_m / (0.5 * PARIS_10M.amplitude_m)) / math.log(growth)
+    n_steps = int(1.5 * predicted)
+    solutions = {}
+    for label, params in (("rotation", PARIS_10M), ("none", NO_ROTATION)):
+        problem = Problem(MODELS["linear"], params, np.linspace(0.0, n_steps * h, 11))
+        solutions[label] = get_integrator("symplectic_euler").solve(problem, step_s=h)
+    assert solutions["none"].status == "ok"
+    assert solutions["rotation"].status == "diverged"
+    assert 0.8 * predicted < solutions["rotation"].steps < 1.2 * predicted
+
+
+def test_composition_weights_validate_themselves() -> None:
+    yoshida = triple_jump(4)
+    assert yoshida.stages == 3 and sum(yoshida.weights) == pytest.approx(1.0, abs=1e-15)
+    with pytest.raises(ValueError, match="symmetric"):
+        Composition(weights=(0.5, 0.3, 0.2), order=2)
+    with pytest.raises(ValueError, match="sum to 1"):
+        Composition(weights=(0.4, 0.4), order=2)
+    outer, middle, _ = yoshida.weights
+    with pytest.raises(ValueError, match="Σγ\\^3"):
+        Composition(weights=(outer + 1e-9, 1.0 - 2 * (outer + 1e-9), outer + 1e-9), order=4)
