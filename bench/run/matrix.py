@@ -209,8 +209,7 @@ def _release_azimuth_variants(scenes: list[Scene], azimuths: Any, problem) -> li
     if azimuths is None:
         return scenes
     if (not isinstance(azimuths, list) or not azimuths
-            or not all(isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-                       for value in azimuths)):
+            or not all(finite_number(value) for value in azimuths)):
         problem(f"release_azimuth_deg must be a non-empty list of finite numbers (degrees), got {azimuths!r}")
         return scenes
     if len(set(azimuths)) != len(azimuths):
