@@ -1,7 +1,8 @@
 """ODE integrators for the Foucault-pendulum models, found through a registry.
 
-Importing this package registers the built-in integrators (one module each) and any plug-ins advertised
-under the entry-point group ``foucault_bench.integrators``. See ``integrators.base`` for the interface.
+Importing this package imports every module in it (the built-in integrators register themselves; nothing is
+listed by hand) and the plug-ins advertised under the entry-point group ``foucault_bench.integrators``
+(``integrators.registry``). See ``integrators.base`` for the interface and how to add an integrator.
 """
 
 from foucault_bench.integrators.base import (
@@ -14,14 +15,19 @@ from foucault_bench.integrators.base import (
     StreamedMetrics,
 )
 from foucault_bench.integrators.fixed_step import FixedStepIntegrator
-from foucault_bench.integrators.registry import REGISTRY, get_integrator, load_plugins, register, unregister
-
-from foucault_bench.integrators import (  # noqa: E402,F401  (registration)
-    boris, composition6, cvode, cvode_py, dop853, dopri5, explicit_euler, gauss_legendre4, heyoka_taylor,
-    implicit_midpoint, rk4, scipy_ivp, symplectic_euler, tsit5, verlet, yoshida4,
+from foucault_bench.integrators.registry import (
+    REGISTRY,
+    built_in_names,
+    discover_built_ins,
+    get_integrator,
+    is_built_in,
+    load_entry_point_plugins,
+    register,
+    unregister,
 )
 
-load_plugins()
+discover_built_ins()
+load_entry_point_plugins()
 
 __all__ = [
     "REGISTRY",
@@ -33,7 +39,9 @@ __all__ = [
     "Problem",
     "Solution",
     "StreamedMetrics",
+    "built_in_names",
     "get_integrator",
+    "is_built_in",
     "register",
     "unregister",
 ]

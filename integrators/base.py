@@ -1,14 +1,31 @@
 """The integrator interface: one small base class, a problem, a solution, counters kept by the framework.
 
-Adding an integrator (see README "Adding an integrator"): subclass ``Integrator`` (or ``FixedStepIntegrator``
-for a compiled fixed-step scheme) in a file of its own, set the class attributes that describe it, implement
-``_solve`` (or ``make_step``), and decorate the class with ``integrators.register``. The framework then
+How to add an integrator (integrators/README.md "Adding an integrator" has a worked example):
+
+1. Write one module. A built-in goes into this package (``integrators/NAME.py``) and is found by discovery:
+   importing ``foucault_bench.integrators`` imports every module of the package (``integrators.registry``).
+   A plug-in lives in its own package and is advertised under the entry-point group
+   ``foucault_bench.integrators`` (or imported with a matrix's ``plugins = [...]`` or ``selftest --plugin``).
+2. Subclass ``Integrator`` and implement ``_solve``, or subclass ``FixedStepIntegrator``
+   (``integrators.fixed_step``) and implement only ``make_step(model)``, a compiled one-step map.
+3. Declare the facts below as class attributes (``name``, ``family``, ``order``, ``stages``, ``adaptive``,
+   ``stability_limit_kh``, ``reference``). They are data, not documentation: the tests derive their sweeps
+   from them (order → step sizes and the expected slope, stability limit → the stability test), the report
+   prints them, and ``register`` refuses a class whose facts are missing or malformed.
+4. Decorate the class with ``@register`` (``integrators.registry``).
+5. Run ``foucault-bench selftest NAME`` (``--plugin MODULE`` for a plug-in): it checks the declared order on
+   every model, the declared stability limit, the counters, and that failures and divergences become rows.
+
+The framework then
 
 * validates the setting (a step size in s for fixed-step methods, a tolerance in (0, 1) for adaptive ones),
 * turns every exception into a ``failed`` solution with the exception's message, and every non-finite
   state into a ``diverged`` one, so that no run crashes a benchmark matrix,
 * fills ``nfev`` from ``stages × steps`` where the integrator does not count evaluations itself,
 * silences the C libraries' chatter on stdout/stderr (SUNDIALS prints its warnings there).
+
+The base class follows SciPy's ``scipy/integrate/_ivp/base.py`` (``OdeSolver``): a few declared attributes,
+one method to implement, the rest done once by the framework.
 """
 
 from __future__ import annotations
@@ -107,21 +124,26 @@ class Solution:
 class Integrator(ABC):
     """Base class of every integrator.
 
-    Class attributes each integrator declares (shown in tables and checked by the tests):
-        name: registry key, e.g. ``"rk4"``.
-        family: grouping for colours and thresholds, e.g. ``"runge-kutta"``.
-        order: classical order of accuracy (``None`` where it varies, e.g. variable-order multistep).
-        stages: right-hand-side evaluations per step for fixed-step schemes (``None`` for adaptive ones).
+    Class attributes each integrator declares (checked by ``register``, read by tests, selftest and reports):
+        name: registry key, an identifier, e.g. ``"rk4"``.
+        family: grouping for colours and thresholds, e.g. ``"runge-kutta"``; a new family is allowed.
+        order: classical order of accuracy p (global error ∝ hᵖ), a positive integer; ``None`` where it varies
+            (variable-order multistep, Taylor). For a fixed-step method the tests and ``selftest`` measure it.
+        stages: right-hand-side evaluations per step for fixed-step schemes; the framework fills
+            ``nfev = stages × steps`` from it. ``None`` for adaptive ones, and for a fixed-step scheme whose
+            evaluations vary per step (an implicit method iterated to convergence), which then reports its own
+            ``nfev`` or none.
         adaptive: ``True`` if driven by a tolerance, ``False`` if by a step size.
-        stability_limit_kh: largest stable k·h on the undamped oscillator ẍ = −k²x, i.e. without Earth's
-            rotation (``None`` if unstable for every h or not applicable).
+        stability_limit_kh: largest stable k·h on the undamped oscillator ẍ = −k²x (no rotation), for
+            fixed-step methods; ``None`` if unstable for every h > 0 (explicit Euler) or not applicable
+            (adaptive). The tests and ``selftest`` check bounded just below and diverged just above it.
         symplectic: the one-step map is symplectic in the canonical variables (r, p = v + ω×r) of a Hamiltonian
             model (checked on the linear model by the test suite: Mᵀ J M = J).
         volume_preserving: the one-step map preserves phase-space volume (det M = 1); implied by ``symplectic``.
         conserves_quadratic_invariants: every quadratic invariant of the system is an exact invariant of the
             one-step map (symplectic Runge–Kutta methods; Hairer, Lubich & Wanner, Thm. IV.2.2), e.g. the linear
             model's energy, kept to round-off.
-        reference: where the method is described.
+        reference: where the method is described (book section or paper).
 
     ``rotation_growth_per_step`` says what rotation does to a method whose ``stability_limit_kh`` holds only
     without it.

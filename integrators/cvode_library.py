@@ -39,10 +39,9 @@ import numpy as np
 
 from foucault_bench.models import Model
 from foucault_bench.models.jit import JIT_OPTIONS
-from foucault_bench.models.parameters import PARAMETER_VECTOR_NAMES
+from foucault_bench.models.parameters import PARAMETER_COUNT
 
 STATE_SIZE = 4
-N_PARAMETERS = len(PARAMETER_VECTOR_NAMES)
 SUNDIALS_MAJOR_VERSION = 7
 LIBRARIES = ("sundials_core", "sundials_cvode")
 CV_ADAMS, CV_BDF = 1, 2
@@ -214,7 +213,7 @@ def compiled_callbacks(library: Sundials, model: Model) -> tuple:
     rhs_into, jacobian_into = model.numba_rhs_into, model.numba_jacobian_into
     data = library.N_VGetArrayPointer_Serial
     dense = library.SUNDenseMatrix_Data
-    n, n_p = STATE_SIZE, N_PARAMETERS
+    n, n_p = STATE_SIZE, PARAMETER_COUNT
     void_p = types.voidptr
 
     @cfunc(types.intc(types.double, void_p, void_p, void_p), **JIT_OPTIONS)

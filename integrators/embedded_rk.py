@@ -47,9 +47,8 @@ from foucault_bench.integrators.base import STATUS_FAILED, Problem, Solution, St
 from foucault_bench.integrators.tableau import ButcherTableau
 from foucault_bench.models import Model
 from foucault_bench.models.jit import jit
-from foucault_bench.models.parameters import PARAMETER_VECTOR_NAMES
+from foucault_bench.models.parameters import PARAMETER_COUNT
 
-PARAMETER_COUNT = len(PARAMETER_VECTOR_NAMES)
 STATE_SIZE = 4
 
 SAFETY = 0.9

@@ -24,11 +24,9 @@ import numpy as np
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from foucault_bench.integrators.base import STATUS_DIVERGED, Integrator, Problem, Solution, StreamedMetrics
-from foucault_bench.models import Model
+from foucault_bench.models import Model, PendulumParameters
 from foucault_bench.models.jit import jit
-from foucault_bench.models.parameters import PARAMETER_VECTOR_NAMES
-
-PARAMETER_COUNT = len(PARAMETER_VECTOR_NAMES)
+from foucault_bench.models.parameters import PARAMETER_COUNT
 
 DIVERGENCE_RADIUS_FACTOR = 1.0e3
 """A run is declared diverged when the bob is farther than this many string lengths from the vertical."""
@@ -175,8 +173,7 @@ class FixedStepIntegrator(Integrator):
 
     def compile(self, model: Model) -> None:
         """Compile (or load from numba's cache) the loop for ``model`` with a one-step run."""
-        p = np.zeros(7)
-        p[1] = p[2] = 1.0
+        p = PendulumParameters(length_m=1.0, latitude_deg=45.0, amplitude_m=0.1).parameter_vector()
         out = np.empty((2, 4))
         self.kernel(model)(np.array([0.1, 0.0, 0.0, 0.0]), p, 0.1, 1, 1, out, True, np.empty((1, 3)), 1.0e3)
 

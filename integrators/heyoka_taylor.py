@@ -134,7 +134,7 @@ class HeyokaTaylor(AdaptiveIntegrator):
         integrator = copy.copy(_compiled_template(model, self.precision, heyoka_tol, monitor))
         integrator.time = fp_type(0.0)
         integrator.state[:] = np.asarray(problem.initial_state, dtype=fp_type)
-        integrator.pars[:] = np.asarray(problem.parameter_vector[: model.heyoka_parameter_count], dtype=fp_type)
+        integrator.pars[:] = np.asarray(model.heyoka_parameters(problem.parameter_vector), dtype=fp_type)
         budget = self.max_steps or step_budget(problem.params, problem.t_end_s)
 
         t_out = problem.t_out

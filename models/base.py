@@ -21,6 +21,25 @@ radius L, z = −√(L² − x² − y²) below the pivot). From that one source
 
 No equation is written twice: the compiled and the symbolic forms are the same Python source run over two
 namespaces.
+
+**Writing a source** (what both namespaces accept):
+
+* arithmetic (``+ − × / **``) on the arguments, reads ``p[P_NAME]`` of the parameter vector with the indices of
+  ``models.parameters`` (never a literal index), module-level numeric constants, and the functions of ``m``
+  (``m.sqrt``, ``m.sin``, ``m.cos``; add one to ``heyoka_math`` before using it);
+* no branch on a state or parameter value (a heyoka expression has no truth value), no NumPy call, no Python
+  object; return floats in every component (a planar model returns ``0.0 * z`` for fz, which keeps numba's
+  types uniform);
+* **helpers**: a function that a source calls must be decorated with ``models.jit.jitable`` and take the
+  namespace ``m`` as its first argument, as ``sphere_height`` below: numba then compiles it into the calling
+  source (a plain function would be a Python object to numba and fail to compile), and over heyoka's
+  namespace it runs as plain Python that builds expressions. numba keys its disk cache by the fingerprint of
+  the source and of everything it reads (``models.jit``), so editing a helper or a constant recompiles.
+
+**Extension points** (models/README.md "Adding a model"): a model is one module of this package with a
+module-level ``MODEL = Model(...)``; ``models`` discovers it (no list to edit). ``refines`` declares which
+simpler models it adds physics to, which places it in the adequacy hierarchy (``adequacy_hierarchy``,
+read by ``bench.problems.adequacy``). heyoka is handed its parameter values by ``Model.heyoka_parameters``.
 """
 
 from __future__ import annotations
@@ -34,7 +53,7 @@ from typing import Callable
 import numpy as np
 
 from foucault_bench.models.jit import jit, jitable
-from foucault_bench.models.parameters import P_LENGTH, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z, PARAMETER_VECTOR_NAMES
+from foucault_bench.models.parameters import P_LENGTH, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z, PARAMETER_COUNT
 
 STATE_NAMES = ("x", "y", "vx", "vy")
 """Every model's state: horizontal position (m) and velocity (m/s) in the rotating (South, East, Up) frame."""
@@ -94,11 +113,14 @@ class Model:
         name: registry key (``models.get_model``).
         title: one line for tables and charts.
         geometry: ``"plane"`` or ``"sphere"``.
-        free_force: the model's force source (see module docstring).
+        free_force: the model's force source (module docstring, "Writing a source"); a helper it calls is
+            decorated with ``models.jit.jitable`` and takes the math namespace ``m`` first.
         energy: source of the conserved quantity (J/kg), or of the monitored energy where none is conserved.
         energy_name: formula of ``energy`` for tables.
         conserves_energy: whether ``energy`` is an exact invariant of the model.
         hamiltonian: whether every velocity-dependent force is the Coriolis force of ``coriolis_vector``.
+        refines: names of the simpler models this one adds physics to (its direct parents in the adequacy
+            hierarchy, e.g. the spherical pendulum refines the seed's planar model); ``()`` for a root.
     """
 
     name: str
@@ -109,6 +131,7 @@ class Model:
     energy_name: str
     conserves_energy: bool
     hamiltonian: bool
+    refines: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.geometry not in ("plane", "sphere"):
@@ -234,11 +257,11 @@ class Model:
     # --- heyoka ---------------------------------------------------------------------------------------------
     def heyoka_system(self) -> list:
         """The first-order system as heyoka (variable, expression) pairs, parameters as ``heyoka.par[i]``
-        in the layout of ``PARAMETER_VECTOR_NAMES``."""
+        in the layout of ``models.parameters.PARAMETER_SLOTS``."""
         import heyoka
 
         x, y, vx, vy = heyoka.make_vars(*STATE_NAMES)
-        pars = [heyoka.par[i] for i in range(len(PARAMETER_VECTOR_NAMES))]
+        pars = [heyoka.par[i] for i in range(PARAMETER_COUNT)]
         ax, ay = self.acceleration(heyoka_math(), x, y, vx, vy, pars)
         return [(x, vx), (y, vy), (vx, ax), (vy, ay)]
 
@@ -247,7 +270,7 @@ class Model:
         import heyoka
 
         x, y, vx, vy = heyoka.make_vars(*STATE_NAMES)
-        pars = [heyoka.par[i] for i in range(len(PARAMETER_VECTOR_NAMES))]
+        pars = [heyoka.par[i] for i in range(PARAMETER_COUNT)]
         return self.energy(heyoka_math(), x, y, vx, vy, pars)
 
     @functools.cached_property
@@ -258,7 +281,17 @@ class Model:
         import heyoka
 
         used = heyoka.get_params([rhs for _, rhs in self.heyoka_system()])
-        return 1 + max((i for i in range(len(PARAMETER_VECTOR_NAMES)) if heyoka.par[i] in used), default=-1)
+        return 1 + max((i for i in range(PARAMETER_COUNT) if heyoka.par[i] in used), default=-1)
+
+    def heyoka_parameters(self, vectors: np.ndarray) -> np.ndarray:
+        """The values heyoka's integrators and compiled functions take for this model's ``heyoka.par``: the
+        leading ``heyoka_parameter_count`` entries of a full parameter vector (shape (PARAMETER_COUNT,)) or of
+        each row of a stack of them (shape (n, PARAMETER_COUNT); transpose for a batch integrator).
+        The one place that slices the vector for heyoka; ``ValueError`` for a vector of another length."""
+        vectors = np.asarray(vectors)
+        if vectors.shape[-1:] != (PARAMETER_COUNT,):
+            raise ValueError(f"expected full parameter vectors of length {PARAMETER_COUNT}, got shape {vectors.shape}")
+        return vectors[..., : self.heyoka_parameter_count]
 
     @functools.cached_property
     def jacobian_into(self) -> Callable:
@@ -275,10 +308,10 @@ class Model:
         variables = [variable for variable, _ in system]
         derivatives = [heyoka.diff(rhs, variable) for _, rhs in system for variable in variables]
         compiled = heyoka.cfunc(derivatives, vars=variables)
-        n_pars = self.heyoka_parameter_count
+        heyoka_parameters = self.heyoka_parameters
 
         def jacobian_into(t, y, out, p):
-            compiled(y, pars=p[:n_pars], outputs=np.reshape(out, -1, copy=False))  # raises rather than copy
+            compiled(y, pars=heyoka_parameters(p), outputs=np.reshape(out, -1, copy=False))  # raises rather than copy
 
         return jacobian_into
 

@@ -8,12 +8,22 @@ precession of the swing plane is −Ω_E sin φ about the local upward vertical:
 north, counter-clockwise in the south, none at the equator.
 
 All quantities are SI (m, s, rad/s) except the two angles, which are in degrees.
+
+**Extension points** (models/README.md "Adding a model"):
+
+* a physical parameter is one field of ``PendulumParameters`` with its rule in the field's metadata
+  (``rule(check, requirement)``): ``__post_init__`` checks the type of every field and then each rule, in field
+  order, and names the field in the error;
+* the parameter vector that compiled code reads is defined once, by ``PARAMETER_SLOTS`` (name, unit, how the
+  value follows from the fields). Every index (``P_GRAVITY`` ...), the length ``PARAMETER_COUNT`` and
+  ``PARAMETER_VECTOR_NAMES`` are derived from it; nothing else in the suite writes a length or an index.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
+from typing import Any, Callable
 
 import numpy as np
 
@@ -22,9 +32,13 @@ SIDEREAL_EARTH_RATE_RAD_S = 7.2921159e-5
 
 STANDARD_GRAVITY_M_S2 = 9.81
 
-# Layout of the parameter vector handed to every compiled right-hand side (one layout for all models).
-P_GRAVITY, P_LENGTH, P_K2, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z, P_CENTRIFUGAL = range(7)
-PARAMETER_VECTOR_NAMES = ("g", "L", "k2", "omega_x", "omega_y", "omega_z", "centrifugal")
+
+def rule(check: Callable[[Any, "PendulumParameters"], bool] | None = None, requirement: str = "",
+         kind: str = "real") -> dict:
+    """Field metadata: ``check(value, params)`` must hold, else ValueError "FIELD REQUIREMENT, got VALUE"
+    (``requirement`` may name other fields as ``{p.length_m}``); ``None``: no rule beyond the kind. ``kind``:
+    "real" (a finite real number), "pair" (two of them) or "bool"."""
+    return {"check": check, "requirement": requirement, "kind": kind}
 
 
 @dataclass(frozen=True)
@@ -43,42 +57,39 @@ class PendulumParameters:
         centrifugal: keep the centrifugal force −ω×(ω×r) in the spherical model (the planar models have none).
     """
 
-    length_m: float
-    latitude_deg: float
-    amplitude_m: float
-    gravity_m_s2: float = STANDARD_GRAVITY_M_S2
-    earth_rate_rad_s: float = SIDEREAL_EARTH_RATE_RAD_S
-    release_azimuth_deg: float = 90.0
-    release_velocity_m_s: tuple[float, float] = (0.0, 0.0)
-    centrifugal: bool = True
+    length_m: float = field(metadata=rule(lambda v, p: v > 0, "must be > 0 (the string length in m)"))
+    latitude_deg: float = field(metadata=rule(lambda v, p: -90.0 <= v <= 90.0, "must lie in [-90, 90] degrees"))
+    amplitude_m: float = field(metadata=rule(lambda v, p: 0.0 < v < p.length_m,
+                                             "must satisfy 0 < amplitude_m < length_m = {p.length_m!r} m"))
+    gravity_m_s2: float = field(default=STANDARD_GRAVITY_M_S2, metadata=rule(lambda v, p: v > 0, "must be > 0"))
+    earth_rate_rad_s: float = field(default=SIDEREAL_EARTH_RATE_RAD_S,
+                                    metadata=rule(lambda v, p: v >= 0, "must be >= 0"))
+    release_azimuth_deg: float = field(default=90.0, metadata=rule())
+    release_velocity_m_s: tuple[float, float] = field(default=(0.0, 0.0),
+                                                      metadata=rule(kind="pair"))
+    centrifugal: bool = field(default=True, metadata=rule(kind="bool"))
 
     def __post_init__(self) -> None:
-        for field in fields(self):
-            value = getattr(self, field.name)
-            if field.name == "centrifugal":
+        for spec in fields(self):
+            value = getattr(self, spec.name)
+            kind = spec.metadata["kind"]
+            if kind == "bool":
                 if not isinstance(value, (bool, np.bool_)):
-                    raise ValueError(f"centrifugal must be true or false, got {value!r}")
+                    raise ValueError(f"{spec.name} must be true or false, got {value!r}")
                 continue
-            components = value if field.name == "release_velocity_m_s" else (value,)
-            if field.name == "release_velocity_m_s" and len(components) != 2:
-                raise ValueError(f"release_velocity_m_s must be a pair (vx, vy) in m/s, got {value!r}")
+            components = value if kind == "pair" else (value,)
+            if kind == "pair" and (not isinstance(value, (tuple, list)) or len(value) != 2):
+                raise ValueError(f"{spec.name} must be a pair (vx, vy) in m/s, got {value!r}")
             for component in components:
                 if isinstance(component, bool) or not isinstance(component, (int, float, np.floating, np.integer)):
-                    raise ValueError(f"{field.name} must be a real number, got {component!r}")
+                    raise ValueError(f"{spec.name} must be a real number, got {component!r}")
                 if not math.isfinite(component):
-                    raise ValueError(f"{field.name} must be finite, got {component!r}")
-        if self.length_m <= 0:
-            raise ValueError(f"length_m must be > 0 (the string length in m), got {self.length_m!r}")
-        if self.gravity_m_s2 <= 0:
-            raise ValueError(f"gravity_m_s2 must be > 0, got {self.gravity_m_s2!r}")
-        if not -90.0 <= self.latitude_deg <= 90.0:
-            raise ValueError(f"latitude_deg must lie in [-90, 90] degrees, got {self.latitude_deg!r}")
-        if self.earth_rate_rad_s < 0:
-            raise ValueError(f"earth_rate_rad_s must be >= 0, got {self.earth_rate_rad_s!r}")
-        if not 0.0 < self.amplitude_m < self.length_m:
-            raise ValueError(
-                f"amplitude_m must satisfy 0 < amplitude_m < length_m = {self.length_m!r} m, got {self.amplitude_m!r}"
-            )
+                    raise ValueError(f"{spec.name} must be finite, got {component!r}")
+        for spec in fields(self):
+            value = getattr(self, spec.name)
+            check = spec.metadata["check"]
+            if check is not None and not check(value, self):
+                raise ValueError(f"{spec.name} {spec.metadata['requirement'].format(p=self)}, got {value!r}")
         object.__setattr__(self, "release_velocity_m_s", tuple(float(v) for v in self.release_velocity_m_s))
 
     @property
@@ -111,18 +122,47 @@ class PendulumParameters:
         return 2.0 * math.pi / self.pendulum_frequency_rad_s
 
     def parameter_vector(self) -> np.ndarray:
-        """The float64 vector every compiled right-hand side reads (layout: ``PARAMETER_VECTOR_NAMES``)."""
-        wx, wy, wz = self.omega_vector_rad_s
-        return np.array(
-            [self.gravity_m_s2, self.length_m, self.gravity_m_s2 / self.length_m, wx, wy, wz, float(self.centrifugal)],
-            dtype=np.float64,
-        )
+        """The float64 vector every compiled right-hand side reads, in the layout of ``PARAMETER_SLOTS``."""
+        return np.array([slot.value(self) for slot in PARAMETER_SLOTS], dtype=np.float64)
 
     def initial_state(self) -> np.ndarray:
         """(x, y, ẋ, ẏ) at t = 0 in m and m/s: released at ``amplitude_m`` along ``release_azimuth_deg``."""
         vx, vy = self.release_velocity_m_s
         cos_psi, sin_psi = _exact_cos_sin_deg(self.release_azimuth_deg)
         return np.array([self.amplitude_m * cos_psi, self.amplitude_m * sin_psi, vx, vy])
+
+
+@dataclass(frozen=True)
+class ParameterSlot:
+    """One entry of the parameter vector: its name, unit, and value for given parameters."""
+
+    name: str
+    unit: str
+    value: Callable[[PendulumParameters], float]
+
+
+PARAMETER_SLOTS: tuple[ParameterSlot, ...] = (
+    ParameterSlot("g", "m/s²", lambda p: p.gravity_m_s2),
+    ParameterSlot("L", "m", lambda p: p.length_m),
+    ParameterSlot("k2", "1/s²", lambda p: p.gravity_m_s2 / p.length_m),
+    ParameterSlot("omega_x", "rad/s", lambda p: p.omega_vector_rad_s[0]),
+    ParameterSlot("omega_y", "rad/s", lambda p: p.omega_vector_rad_s[1]),
+    ParameterSlot("omega_z", "rad/s", lambda p: p.omega_vector_rad_s[2]),
+    ParameterSlot("centrifugal", "1 or 0", lambda p: float(p.centrifugal)),
+)
+"""The layout of the parameter vector handed to every compiled right-hand side (one layout for all models).
+Append a slot to give models a new quantity; the indices below follow."""
+
+PARAMETER_VECTOR_NAMES: tuple[str, ...] = tuple(slot.name for slot in PARAMETER_SLOTS)
+PARAMETER_COUNT = len(PARAMETER_SLOTS)
+PARAMETER_INDEX: dict[str, int] = {name: index for index, name in enumerate(PARAMETER_VECTOR_NAMES)}
+P_GRAVITY = PARAMETER_INDEX["g"]
+P_LENGTH = PARAMETER_INDEX["L"]
+P_K2 = PARAMETER_INDEX["k2"]
+P_OMEGA_X = PARAMETER_INDEX["omega_x"]
+P_OMEGA_Y = PARAMETER_INDEX["omega_y"]
+P_OMEGA_Z = PARAMETER_INDEX["omega_z"]
+P_CENTRIFUGAL = PARAMETER_INDEX["centrifugal"]
 
 
 def _exact_cos_sin_deg(angle_deg: float) -> tuple[float, float]:

@@ -40,4 +40,5 @@ MODEL = Model(
     energy_name="E = ½|v|² + ½k²|r|² (not conserved)",
     conserves_energy=False,
     hamiltonian=False,
+    refines=("linear",),
 )

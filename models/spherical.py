@@ -59,4 +59,5 @@ MODEL = Model(
     energy_name="Jacobi h = ½|ṙ|² + gz − (c/2)|ω×r|²",
     conserves_energy=True,
     hamiltonian=True,
+    refines=("seed_planar",),
 )

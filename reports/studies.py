@@ -248,7 +248,7 @@ def precession_vs_latitude(config: PrecessionLatitudeConfig = PrecessionLatitude
     params = [PendulumParameters(length_m=config.length_m, latitude_deg=float(lat), amplitude_m=config.amplitude_m)
               for lat in latitudes]
     state0 = np.ascontiguousarray(np.array([p.initial_state() for p in params]).T)
-    pars = np.ascontiguousarray(np.array([p.parameter_vector() for p in params]).T)
+    pars = np.ascontiguousarray(model.heyoka_parameters(np.array([p.parameter_vector() for p in params])).T)
     turning: list[list[tuple[float, float, float]]] = [[] for _ in params]
 
     def record_turning_point(ta, time: float, direction_sign: int, batch_index: int) -> None:

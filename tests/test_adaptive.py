@@ -26,7 +26,7 @@ import sys
 import numpy as np
 import pytest
 
-from foucault_bench.integrators import REGISTRY, Problem, Solution, get_integrator
+from foucault_bench.integrators import REGISTRY, Problem, Solution, built_in_names, get_integrator
 from foucault_bench.integrators.adaptive import state_scale
 from foucault_bench.bench.verdicts.turning_points import (
     azimuth_error_bound,
@@ -45,7 +45,7 @@ from foucault_bench.models import MODELS, Model, PendulumParameters
 from foucault_bench.models.analytic import linear_exact, textbook_turning_azimuth
 from foucault_bench.models.parameters import P_K2, P_LENGTH
 
-ADAPTIVE = sorted(name for name, integrator in REGISTRY.items() if integrator.adaptive)
+ADAPTIVE = [name for name in built_in_names() if REGISTRY[name].adaptive]
 SCENE = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
 T_OUT = np.linspace(0.0, 120.0, 121)
 LOOSE, TIGHT = 1.0e-6, 1.0e-10
@@ -82,8 +82,8 @@ def grid_turning_points(solution: Solution, model_name: str) -> np.ndarray:
     return turning_points_from_grid(solution.t, solution.y, accelerations, include_release=False)
 
 
-def test_every_adaptive_family_is_registered() -> None:
-    assert set(ADAPTIVE) == set(INTEGRATOR_CLASSES)
+def test_the_library_drivers_are_discovered() -> None:
+    assert set(INTEGRATOR_CLASSES) <= set(ADAPTIVE)
 
 
 @pytest.mark.parametrize("name", ADAPTIVE)

@@ -1,8 +1,13 @@
 """Fixed-step schemes: observed convergence order, linear stability limits, Euler's energy growth, streaming.
 
-Theory (PHYSICS.md "Integrators"; Hairer, Nørsett & Wanner, Solving ODEs I, §IV.2): on ẍ = −k²x explicit
-Euler multiplies the energy by exactly (1 + (kh)²) per step; RK4 is stable for kh ≤ 2√2; Störmer–Verlet for
-kh < 2. At the equator the linear model has a = Ω_E sin 0 = 0 and is exactly that oscillator (in 2-D).
+Every sweep comes from what an integrator declares (``integrators.base.Integrator``), never from a table of
+names, and runs over the built-in integrators (plug-ins are checked by their authors with ``foucault-bench
+selftest``, which runs the same code, so an installed plug-in cannot fail this suite): the order test runs for every fixed-step integrator with a declared order on every model, with the
+step sweep and the fit of ``bench.gate.conformance.measure_order`` (the code behind ``foucault-bench
+selftest``); the stability test runs for every integrator that declares a stability limit. Theory
+(Hairer, Nørsett & Wanner, Solving ODEs I, §IV.2): on ẍ = −k²x explicit Euler multiplies the energy by exactly
+(1 + (kh)²) per step; RK4 is stable for kh ≤ 2√2; Störmer–Verlet for kh < 2. At the equator, or with Earth's
+rotation off, the linear model is exactly that oscillator (in 2-D).
 """
 
 from __future__ import annotations
@@ -12,92 +17,33 @@ import math
 import numpy as np
 import pytest
 
-from foucault_bench.integrators import REGISTRY, FixedStepIntegrator, Problem, get_integrator
+from foucault_bench.bench.gate.conformance import ORDER_TOLERANCE, check_stability, measure_order, oscillator_run
+from foucault_bench.integrators import REGISTRY, Problem, built_in_names, get_integrator
 from foucault_bench.models import MODELS, PendulumParameters
-from foucault_bench.models.analytic import linear_exact
 
-FIXED_STEP = sorted(name for name, integ in REGISTRY.items() if isinstance(integ, FixedStepIntegrator))
+FIXED_STEP = [name for name in built_in_names() if not REGISTRY[name].adaptive]
+WITH_ORDER = [name for name in FIXED_STEP if REGISTRY[name].order is not None]
+WITH_LIMIT = [name for name in built_in_names() if REGISTRY[name].stability_limit_kh is not None]
 PARIS = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
 EQUATOR = PendulumParameters(length_m=67.0, latitude_deg=0.0, amplitude_m=3.0)
 
-# Fit window for observed orders: errors (relative to the amplitude) between round-off (well above 1e-12, so
-# that accumulated round-off ~1e-14·steps stays negligible) and the pre-asymptotic regime (below 3e-2, where
-# the next term of the error expansion is a few % of the leading one at most).
-FIT_WINDOW = (1e-11, 3e-2)
-ORDER_TOLERANCE = 0.15
-
-
-def _final_error(integrator_name: str, params: PendulumParameters, model: str, n_steps: int,
-                 periods: float, reference: np.ndarray) -> float:
-    duration = periods * params.small_swing_period_s
-    problem = Problem(MODELS[model], params, np.array([0.0, duration]))
-    solution = get_integrator(integrator_name).solve(problem, step_s=duration / n_steps)
-    assert solution.status == "ok", solution.message
-    return float(np.hypot(*(solution.y[-1, :2] - reference[:2])) / params.amplitude_m)
-
-
-def observed_order(step_sizes: np.ndarray, errors: np.ndarray) -> float:
-    """Least-squares slope of log(error) against log(h) over the points inside FIT_WINDOW."""
-    keep = (errors > FIT_WINDOW[0]) & (errors < FIT_WINDOW[1])
-    assert keep.sum() >= 3, f"fewer than 3 points in the fit window: {errors}"
-    return float(np.polyfit(np.log(step_sizes[keep]), np.log(errors[keep]), 1)[0])
-
-
-def _reference_final_state(params: PendulumParameters, model: str, periods: float) -> np.ndarray:
-    """Linear model: the closed form. Other models: RK4 with a step 16× finer than the finest in the sweep
-    (its error (kh)⁴ is then ≥ 16⁴ = 65536× below RK4's finest point, far below every fitted error)."""
-    duration = periods * params.small_swing_period_s
-    if model == "linear":
-        return linear_exact(params, np.array([duration]))[0]
-    problem = Problem(MODELS[model], params, np.array([0.0, duration]))
-    solution = get_integrator("rk4").solve(problem, step_s=duration / 2**17)
-    return solution.y[-1]
-
-
-SWEEPS = {  # steps per period: powers of two chosen so that ≥ 3 points fall in the fit window
-    "explicit_euler": 2 ** np.arange(10, 17),
-    "symplectic_euler": 2 ** np.arange(8, 15),
-    "rk4": 2 ** np.arange(4, 10),
-    "verlet": 2 ** np.arange(5, 12),
-    "boris": 2 ** np.arange(5, 12),
-    "implicit_midpoint": 2 ** np.arange(5, 12),
-    "yoshida4": 2 ** np.arange(4, 10),
-    "gauss_legendre4": 2 ** np.arange(3, 9),
-    "composition6": 2 ** np.arange(3, 8),
-}
-
 
 @pytest.mark.parametrize("model", sorted(MODELS))
-@pytest.mark.parametrize("integrator_name", FIXED_STEP)
+@pytest.mark.parametrize("integrator_name", WITH_ORDER)
 def test_observed_order_matches_declared_order(integrator_name: str, model: str) -> None:
-    periods = 1.125  # kt = 2.25π: neither a turning point nor a zero crossing, where the phase (resp. the
-    # amplitude) error would be hidden and a higher order observed
-    params = PendulumParameters(length_m=3.0, latitude_deg=40.44, amplitude_m=0.3)
-    reference = _reference_final_state(params, model, periods)
-    steps_per_period = SWEEPS[integrator_name]
-    errors = np.array([_final_error(integrator_name, params, model, int(n * periods), periods, reference)
-                       for n in steps_per_period])
-    order = observed_order(params.small_swing_period_s / steps_per_period, errors)
-    assert abs(order - get_integrator(integrator_name).order) <= ORDER_TOLERANCE, (order, errors)
+    integrator = get_integrator(integrator_name)
+    measured = measure_order(integrator, MODELS[model])
+    assert abs(measured.order - integrator.order) <= ORDER_TOLERANCE, measured
+
+
+@pytest.mark.parametrize("integrator_name", WITH_LIMIT)
+def test_stable_just_below_the_limit_and_diverging_just_above(integrator_name: str) -> None:
+    for check in check_stability(get_integrator(integrator_name)):
+        assert check.holds, f"{check.name}: {check.detail}"
 
 
 def _energy_growth(integrator_name: str, kh: float, n_steps: int, params: PendulumParameters = EQUATOR):
-    k = params.pendulum_frequency_rad_s
-    h = kh / k
-    problem = Problem(MODELS["linear"], params, np.array([0.0, n_steps * h]))
-    return get_integrator(integrator_name).solve(problem, step_s=h)
-
-
-@pytest.mark.parametrize("integrator_name", ["rk4", "verlet", "symplectic_euler"])
-def test_stable_just_below_the_limit_and_diverging_just_above(integrator_name: str) -> None:
-    limit = get_integrator(integrator_name).stability_limit_kh
-    below = _energy_growth(integrator_name, limit * 0.99, 20_000)
-    below_longer = _energy_growth(integrator_name, limit * 0.99, 40_000)
-    assert below.status == below_longer.status == "ok"
-    # bounded: the energy error reached in 20,000 steps does not grow over the next 20,000
-    assert below_longer.streamed.energy_max_rel_error <= below.streamed.energy_max_rel_error * (1 + 1e-6)
-    above = _energy_growth(integrator_name, limit * 1.01, 20_000)
-    assert above.status == "diverged", above.streamed
+    return oscillator_run(get_integrator(integrator_name), kh, n_steps, params)
 
 
 def test_explicit_euler_energy_grows_as_one_plus_kh_squared_to_the_n() -> None:

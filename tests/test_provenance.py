@@ -1,31 +1,32 @@
-"""Provenance: the code version covers the plug-ins' sources, entry-point plug-ins included."""
+"""Provenance: the code version covers the plug-ins' sources (named in a matrix or loaded from entry points)."""
 
 from __future__ import annotations
 
-from importlib.metadata import EntryPoint
-
 from foucault_bench.bench.run import provenance
+from foucault_bench.integrators import registry
 
 
 def test_an_entry_point_plugin_source_enters_the_code_version(tmp_path, monkeypatch):
     module = tmp_path / "my_plugin_integrator.py"
     module.write_text("ORDER = 2\n", encoding="utf-8")
     monkeypatch.syspath_prepend(str(tmp_path))
-    advertised = [EntryPoint(name="mine", value="my_plugin_integrator:Mine", group=provenance.PLUGIN_ENTRY_POINT_GROUP)]
-    monkeypatch.setattr(provenance, "entry_points", lambda group: advertised if group == advertised[0].group else [])
+    monkeypatch.setattr(registry, "ENTRY_POINT_MODULES", ["my_plugin_integrator"])  # as if loaded from one
 
     assert module in provenance.plugin_sources()
     before = provenance.code_version.__wrapped__()
     module.write_text("ORDER = 3\n", encoding="utf-8")  # the plug-in changed: its stored rows must not be reused
     assert provenance.code_version.__wrapped__() != before
-    monkeypatch.setattr(provenance, "entry_points", lambda group: [])
-    assert provenance.code_version.__wrapped__() != before  # and without it the version differs too
 
 
-def test_a_named_plugin_module_enters_the_code_version_once(tmp_path, monkeypatch):
-    module = tmp_path / "named_plugin.py"
-    module.write_text("X = 1\n", encoding="utf-8")
+def test_a_plugin_package_enters_with_all_its_modules_and_a_module_once(tmp_path, monkeypatch):
+    package = tmp_path / "plugin_package"
+    package.mkdir()
+    (package / "__init__.py").write_text("from plugin_package import stepper\n", encoding="utf-8")
+    (package / "stepper.py").write_text("X = 1\n", encoding="utf-8")
     monkeypatch.syspath_prepend(str(tmp_path))
-    monkeypatch.setattr(provenance, "entry_points", lambda group: [])
-    assert provenance.plugin_sources(["named_plugin", "named_plugin"]) == [module]
-    assert provenance.code_version.__wrapped__(("named_plugin",)) != provenance.code_version.__wrapped__()
+    monkeypatch.setattr(registry, "ENTRY_POINT_MODULES", [])
+    assert provenance.plugin_sources(["plugin_package", "plugin_package"]) == [package / "__init__.py",
+                                                                                package / "stepper.py"]
+    before = provenance.code_version.__wrapped__(("plugin_package",))
+    (package / "stepper.py").write_text("X = 2\n", encoding="utf-8")
+    assert provenance.code_version.__wrapped__(("plugin_package",)) != before

@@ -12,6 +12,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "run": ("run", "run a benchmark matrix and store one row per run"),
     "results": ("results", "list, export and compare stored runs"),
     "check": ("check", "check stored or fresh results against a thresholds file (CI gate)"),
+    "selftest": ("selftest", "check an integrator (built-in or plug-in) against its declared facts"),
     "perf": ("perf", "measure the suite's own speed against C loops and bare libraries"),
     "report": ("report", "build the HTML/Markdown report from a results database"),
     "seed": ("seed", "reproduce and correct the seed note's figures"),

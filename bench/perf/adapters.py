@@ -83,7 +83,7 @@ def bare_heyoka(problem) -> Callable[[], Any]:
         rows.append((float(t), float(integrator.d_output[0]), float(integrator.d_output[1])))
 
     event = heyoka.nt_event(x * vx + y * vy, record, direction=heyoka.event_direction.negative)
-    pars = problem.parameter_vector[: model.heyoka_parameter_count]
+    pars = model.heyoka_parameters(problem.parameter_vector)
     integrator = heyoka.taylor_adaptive(system, problem.initial_state, tol=heyoka_tolerance(problem.params, TOL),
                                         pars=pars, nt_events=[event])
     grid = problem.t_out

@@ -52,9 +52,8 @@ class Sweep:
         self.params = sweep_parameters()
         model = MODELS[MODEL]
         system = model.heyoka_system()
-        self.n_pars = model.heyoka_parameter_count
         self.states = np.array([p.initial_state() for p in self.params])
-        self.pars = np.array([p.parameter_vector()[: self.n_pars] for p in self.params])
+        self.pars = model.heyoka_parameters(np.array([p.parameter_vector() for p in self.params]))
         self.lanes = heyoka.recommended_simd_size()
         tol = heyoka_tolerance(self.params[0], TOL)  # the same for every latitude (same swing)
         start = time.perf_counter()

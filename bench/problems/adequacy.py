@@ -1,8 +1,9 @@
 """Model adequacy: what a scene would get wrong with another model of the hierarchy, measured, not argued.
 
-The models form a hierarchy (PHYSICS.md "Models"): linear planar (seed eqs. 6-7) < the seed's nonlinear planar
-(eqs. 4-5) < the spherical pendulum with the full rotation vector. For a scene, every pair of models in which
-the scene's model takes part is integrated with the reference integrator on the scene's grid (each run is a
+The models form a hierarchy that each model declares (``Model.refines``; ``models.simpler_models``,
+``models.richer_models``): today linear planar (seed eqs. 6-7) < the seed's nonlinear planar (eqs. 4-5) < the
+spherical pendulum with the full rotation vector. For a scene, every pair of models in which the scene's
+model takes part is integrated with the reference integrator on the scene's grid (each run is a
 cached ``bench.problems.reference`` of the scene with the model replaced) and compared:
 
 * ``precession_rate_diff``: (rate of the simpler model − rate of the richer) / (Ω_E|sin φ|), signed, from the
@@ -30,27 +31,22 @@ from foucault_bench.bench.problems.reference import Reference, reference_for
 from foucault_bench.bench.problems.scenes import Scene
 from foucault_bench.bench.verdicts.columns import max_position_gap
 from foucault_bench.bench.verdicts.turning_points import rate_scale
-
-MODEL_HIERARCHY: tuple[str, ...] = ("linear", "seed_planar", "spherical")
-"""Models from simplest to richest (PHYSICS.md "Models" 1, 3, 4)."""
-
-PLANAR_MODELS = ("linear", "seed_planar")
+from foucault_bench.models import MODELS, get_model, richer_models, simpler_models
 
 
 def model_adequacy(scene: Scene) -> list[dict[str, Any]]:
-    """One row per pair (richer model, simpler model) of ``MODEL_HIERARCHY`` that contains the scene's model.
+    """One row per pair (richer model, simpler model) of the hierarchy that contains the scene's model.
 
     Columns: ``scene``, ``model`` (the richer model of the pair: the scene's own model whenever it is the richer
     one), ``simpler_model``, ``scene_model``, ``precession_rate_diff``, ``trajectory_gap``,
     ``expected_rate_diff`` and ``expected_trajectory_gap`` (leading-order theory, NaN where none applies), and
-    ``note``. A scene whose model is outside the hierarchy gets no rows.
+    ``note``. A scene whose model neither refines nor is refined by another gets no rows.
     """
-    if scene.model not in MODEL_HIERARCHY:
+    if scene.model not in MODELS:
         return []
-    position = MODEL_HIERARCHY.index(scene.model)
-    pairs = [(scene.model, simpler) for simpler in MODEL_HIERARCHY[:position]]
-    pairs += [(richer, scene.model) for richer in MODEL_HIERARCHY[position + 1:]]
-    references = {name: _reference_with_model(scene, name) for name in MODEL_HIERARCHY}
+    pairs = [(scene.model, simpler) for simpler in simpler_models(scene.model)]
+    pairs += [(richer, scene.model) for richer in richer_models(scene.model)]
+    references = {name: _reference_with_model(scene, name) for pair in pairs for name in pair}
     return [_row(scene, richer, simpler, references[richer], references[simpler]) for richer, simpler in pairs]
 
 
@@ -59,9 +55,13 @@ def _reference_with_model(scene: Scene, model: str) -> Reference:
     return reference_for(variant)
 
 
+def _planar_against_sphere(richer: str, simpler: str) -> bool:
+    return get_model(richer).constrained_to_sphere and not get_model(simpler).constrained_to_sphere
+
+
 def expected_rate_diff(scene: Scene, richer: str, simpler: str) -> float:
     """Leading-order (simpler − richer) rate difference / (Ω_E|sin φ|): the Airy term for planar vs spherical."""
-    if richer == "spherical" and simpler in PLANAR_MODELS:
+    if _planar_against_sphere(richer, simpler):
         theta0 = scene.params.amplitude_m / scene.params.length_m
         return -math.copysign(1.0, scene.params.latitude_deg) * 0.375 * theta0**2 if scene.params.latitude_deg else 0.0
     return math.nan
@@ -70,7 +70,7 @@ def expected_rate_diff(scene: Scene, richer: str, simpler: str) -> float:
 def expected_trajectory_gap(scene: Scene, richer: str, simpler: str) -> float:
     """Leading-order gap / A between a planar model and the spherical one at the end of the scene: the phase
     the finite-amplitude frequency shift k θ₀²/16 accumulates, 2|sin(½ Δφ)| (its max over time while Δφ < π)."""
-    if richer == "spherical" and simpler in PLANAR_MODELS:
+    if _planar_against_sphere(richer, simpler):
         params = scene.params
         theta0 = params.amplitude_m / params.length_m
         phase = params.pendulum_frequency_rad_s * theta0**2 / 16.0 * scene.duration_s

@@ -2,8 +2,8 @@
 
 * ``code_version``: SHA-256 of the package version and of every source file that determines a row's numbers
   (``NUMBER_SOURCES``, relative to ``PACKAGE_ROOT``) plus the sources of plug-in modules (those a matrix names
-  and those advertised under the integrator entry-point group), so that ``--resume`` never reuses a row of
-  other code;
+  and those the registry loaded from entry points; a plug-in package with all its modules), so that
+  ``--resume`` never reuses a row of other code;
 * ``source_digest``: the same hash over any list of files (the reference cache keys its files with it);
 * ``digest``: a short SHA-256 of plain data (run keys, matrix hashes);
 * ``git_commit``, ``cpu_model``, ``package_versions``, ``machine``: the matrix run's provenance record;
@@ -23,7 +23,7 @@ import os
 import platform
 import socket
 import subprocess
-from importlib.metadata import PackageNotFoundError, entry_points, version
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -33,8 +33,6 @@ install, ``site-packages/foucault_bench`` in a wheel install."""
 NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "bench/problems/scenes.py", "bench/problems/reference.py",
                   "bench/verdicts/*.py", "bench/run/runner.py", "bench/run/timing.py")
 """Source files (relative to ``PACKAGE_ROOT``) whose contents are part of every run key."""
-PLUGIN_ENTRY_POINT_GROUP = "foucault_bench.integrators"
-"""Entry-point group of integrator plug-ins (``integrators.registry``); their sources enter ``code_version``."""
 PROVENANCE_PACKAGES = ("numpy", "scipy", "numba", "heyoka", "scikit-sundae", "pandas", "distributed")
 """Libraries whose versions each matrix run records."""
 
@@ -60,23 +58,26 @@ def package_version() -> str:
         return "unknown"
 
 
-def module_source(module_name: str) -> Path | None:
-    """The source file of an importable module (``None`` for built-in, frozen or missing modules)."""
+def module_sources(module_name: str) -> list[Path]:
+    """The source files of an importable module: its file, or every ``.py`` file of a package (none for
+    built-in, frozen or missing modules)."""
     try:
         spec = importlib.util.find_spec(module_name)
     except (ImportError, ValueError):
-        return None
+        return []
     if spec is None or not spec.origin or spec.origin in ("built-in", "frozen"):
-        return None
-    return Path(spec.origin)
+        return []
+    origin = Path(spec.origin)
+    return sorted(origin.parent.rglob("*.py")) if spec.submodule_search_locations else [origin]
 
 
 def plugin_sources(plugins: Iterable[str] = ()) -> list[Path]:
-    """Source files of the named plug-in modules and of every module advertised under the integrator
-    entry-point group (``PLUGIN_ENTRY_POINT_GROUP``), in a stable order."""
-    names = list(plugins) + sorted({entry.module for entry in entry_points(group=PLUGIN_ENTRY_POINT_GROUP)})
-    found = (module_source(name) for name in dict.fromkeys(names))
-    return [path for path in found if path is not None]
+    """Source files of the named plug-in modules and of the modules the registry loaded from entry points
+    (``integrators.registry.ENTRY_POINT_MODULES``), in a stable order, each once."""
+    from foucault_bench.integrators.registry import ENTRY_POINT_MODULES  # the integrators are loaded by then
+
+    names = dict.fromkeys([*plugins, *ENTRY_POINT_MODULES])
+    return list(dict.fromkeys(path for name in names for path in module_sources(name)))
 
 
 @functools.lru_cache(maxsize=None)

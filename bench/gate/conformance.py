@@ -1,0 +1,320 @@
+"""Conformance of one integrator with what it declares: the checks behind ``foucault-bench selftest``.
+
+An integrator declares facts (``integrators.base.Integrator``: order, stages, adaptive, stability limit); this
+module measures them, on small problems that take seconds, so that a plug-in author learns in one command
+whether the suite will treat the method correctly. Every check returns a ``Check`` (a row), never raises:
+
+1. **order on MODEL**, for every model and every fixed-step integrator with a declared order p: the observed
+   order of the final-position error over a step sweep (``measure_order``) lies within ``ORDER_TOLERANCE`` of
+   p. The sweep is derived from the declared facts: it starts at kh = min(½ stability limit, ``START_KH``),
+   halves kh until the error falls below ``MAX_ERROR`` and then keeps ``points_needed(p)`` more points (enough
+   halvings to span ``SPAN_DECADES`` decades of error at order p), stopping early at the round-off floor
+   ``FLOOR_ERROR``; ``bench.verdicts.convergence.observed_order`` fits the slope on the finest points (the
+   same rule the report and the gate use). The sweep runs with Earth's rotation sped up to
+   ``ROTATION_OVER_SWING`` × k: at the real rate (Ω_E/k ≈ 1e-5) an error term proportional to Ω h, such as an
+   explicit Coriolis kick in a Verlet scheme, stays below the (kh)² term at every measurable step and a wrong
+   order would go unseen. References: the closed form for the linear model (``models.analytic``), heyoka's
+   Taylor method at ``REFERENCE_TOL`` for the others (errors ~1e-15 of the amplitude, far below ``FLOOR_ERROR``).
+   Adaptive integrators are skipped: error against tolerance is no order.
+2. **stable below the limit** and **diverges above the limit**, for every declared ``stability_limit_kh``:
+   on the undamped oscillator ẍ = −k²x (the linear model with no rotation, where the limit is defined;
+   Hairer, Nørsett & Wanner, Solving ODEs I, §IV.2) the energy error reached after ``STABILITY_STEPS`` steps
+   at 0.99 × the limit does not grow over as many more (beyond ``ROUND_OFF_GROWTH``), and a run at 1.01 × the
+   limit is ``diverged``.
+3. **counters**: a short run on the linear model is ``ok`` and reports ``steps`` and the step size (fixed
+   step) or the tolerance (adaptive), and ``nfev`` > 0, equal to ``stages × steps`` when ``stages`` is declared.
+   A fixed-step method that declares no ``stages`` (evaluations vary per step) may report no ``nfev``.
+4. **turning points**: where the run streams the radius maxima (``Solution.streamed``, optional: the verdicts
+   find turning points on the output grid), two per swing period, t = 0 not counted: 8 over
+   ``SHORT_RUN_PERIODS`` = 4.25 periods.
+5. **divergence is a row**: on a model with a finite-time singularity (``BLOW_UP``) the run returns
+   ``diverged`` or ``failed`` with a message and NaN after the stop, without raising.
+6. **failure is a row**: on a model whose force raises (``FAILING``) the run returns ``failed`` with the
+   error's message, without raising.
+
+``iter_checks`` yields the rows; ``foucault-bench selftest`` (``bench.commands.selftest``) prints one line each.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable, Iterator
+
+import numpy as np
+
+from foucault_bench.bench.verdicts.convergence import observed_order
+from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK, Integrator, Problem, get_integrator
+from foucault_bench.models import MODELS, Model, PendulumParameters
+from foucault_bench.models.analytic import linear_exact
+from foucault_bench.models.parameters import P_K2, P_LENGTH
+
+ORDER_TOLERANCE = 0.15
+"""|observed − declared order| allowed. The fit over the finest points still carries the next error term,
+relatively O(kh) smaller: measured on the built-in methods, every model, |observed − declared| ≤ 0.06 (RK4 3.94);
+a wrong method is off by a whole order or more (the mutants of tests/check_mutants.py: 1.9 for 4, 1.0 for 2)."""
+
+START_KH = 0.5
+MAX_ERROR = 0.1
+"""Errors (of the final position, in units of the amplitude) above this are not asymptotic yet."""
+FLOOR_ERROR = 1e-10
+"""Below this, accumulated round-off (~1e-16 per step) starts to show: the sweep stops."""
+SPAN_DECADES = 2.0
+MIN_POINTS = 5
+MAX_RUN_STEPS = 4_000_000
+"""A sweep needing more steps in one run than this reports the order check as failed (too slow to converge)."""
+ORDER_PERIODS = 1.125
+"""Sweep duration: kt = 2.25π, neither a turning point nor a zero crossing, where a phase (resp. amplitude)
+error would be hidden and a higher order observed."""
+ROTATION_OVER_SWING = 0.2
+REFERENCE_INTEGRATOR = "heyoka_taylor"
+REFERENCE_TOL = 1e-15
+
+STABILITY_MARGIN = 0.01
+STABILITY_STEPS = 20_000
+GROWTH_ALLOWANCE = 1e-6
+"""Relative growth of the max energy error allowed between 20,000 and 40,000 steps below the limit."""
+ROUND_OFF_GROWTH = 1e-8
+"""Absolute growth of the max relative energy error allowed on top: methods that keep the oscillator's energy
+to round-off (implicit midpoint, Gauss-Legendre: a quadratic invariant) random-walk by ~1e-9 over 40,000 steps
+(their fixed-point iteration stops near round-off), while an unstable mode grows exponentially, to O(1) and
+beyond, in as many steps."""
+
+ORDER_PARAMS = PendulumParameters(length_m=3.0, latitude_deg=40.44, amplitude_m=0.3,
+                                  earth_rate_rad_s=ROTATION_OVER_SWING * math.sqrt(9.81 / 3.0))
+OSCILLATOR = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0, earth_rate_rad_s=0.0)
+SHORT_RUN = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
+SHORT_RUN_PERIODS = 4.25
+SHORT_RUN_KH = 0.1
+SHORT_RUN_TOL = 1e-8
+
+
+@dataclass(frozen=True)
+class Check:
+    """One conformance check: ``holds`` is True, False, or None when the check does not apply (skipped)."""
+
+    name: str
+    holds: bool | None
+    detail: str
+
+    @property
+    def label(self) -> str:
+        return {True: "ok", False: "FAIL", None: "skip"}[self.holds]
+
+
+# --- models that must fail ------------------------------------------------------------------------------------
+
+
+def _blow_up_force(m, x, y, z, vx, vy, vz, p):
+    """r̈ = +k² r |r|²/L²: repelled ever faster, r → ∞ in finite time (t* ≈ 1.85 (L/A)/k from rest at A)."""
+    scale = p[P_K2] * (x * x + y * y) / (p[P_LENGTH] * p[P_LENGTH])
+    return scale * x, scale * y, 0.0 * z
+
+
+def _blow_up_energy(m, x, y, vx, vy, p):
+    """½|v|² − k²|r|⁴/(4L²), conserved up to the singularity (J/kg)."""
+    r2 = x * x + y * y
+    return 0.5 * (vx * vx + vy * vy) - 0.25 * p[P_K2] * r2 * r2 / (p[P_LENGTH] * p[P_LENGTH])
+
+
+def _failing_force(m, x, y, z, vx, vy, vz, p):
+    """Raises on evaluation: at run time in compiled code, at build time over heyoka's expressions."""
+    if p[P_LENGTH] > 0.0:
+        raise FloatingPointError("deliberate failure of the selftest's failing model")
+    return -x, -y, 0.0 * z
+
+
+def _plain_energy(m, x, y, vx, vy, p):
+    return 0.5 * (vx * vx + vy * vy + x * x + y * y)
+
+
+BLOW_UP = Model(name="selftest_blow_up", title="selftest: finite-time blow-up", geometry="plane",
+                free_force=_blow_up_force, energy=_blow_up_energy, energy_name="½|v|² − k²|r|⁴/(4L²)",
+                conserves_energy=True, hamiltonian=True)
+FAILING = Model(name="selftest_failing", title="selftest: force raises", geometry="plane",
+                free_force=_failing_force, energy=_plain_energy, energy_name="½|v|² + ½|r|²",
+                conserves_energy=True, hamiltonian=True)
+BLOW_UP_PARAMS = PendulumParameters(length_m=1.0, latitude_deg=45.0, amplitude_m=0.6, earth_rate_rad_s=0.0)
+
+
+# --- order -----------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class OrderMeasurement:
+    """A step sweep: step sizes (s), final-position errors (units of the amplitude) and the fitted order."""
+
+    step_sizes_s: np.ndarray
+    errors: np.ndarray
+    order: float
+    note: str = ""
+
+
+def points_needed(order: int) -> int:
+    """Sweep points below ``MAX_ERROR``: enough halvings to span ``SPAN_DECADES`` decades at order p."""
+    return max(MIN_POINTS, math.ceil(SPAN_DECADES / (order * math.log10(2.0))) + 1)
+
+
+def reference_final_state(model: Model, params: PendulumParameters, duration_s: float) -> np.ndarray:
+    """The exact final state for the linear model, heyoka's Taylor method at ``REFERENCE_TOL`` otherwise."""
+    if model is MODELS.get("linear"):
+        return linear_exact(params, np.array([duration_s]))[0]
+    problem = Problem(model, params, np.array([0.0, duration_s]))
+    solution = get_integrator(REFERENCE_INTEGRATOR).solve(problem, tol=REFERENCE_TOL, monitor=False)
+    if solution.status != STATUS_OK:
+        raise RuntimeError(f"the reference run failed: {solution.message}")
+    return solution.y[-1]
+
+
+def measure_order(integrator: Integrator, model: Model, params: PendulumParameters = ORDER_PARAMS,
+                  periods: float = ORDER_PERIODS) -> OrderMeasurement:
+    """Observed order of ``integrator`` on ``model`` over a step sweep derived from its declared facts (see the
+    module docstring, check 1)."""
+    duration = periods * params.small_swing_period_s
+    k = params.pendulum_frequency_rad_s
+    reference = reference_final_state(model, params, duration)
+    problem = Problem(model, params, np.array([0.0, duration]))
+    limit = integrator.stability_limit_kh
+    kh = min(START_KH, 0.5 * limit) if limit else START_KH
+    wanted = points_needed(integrator.order)
+    steps, errors = [], []
+    note = ""
+    while sum(error <= MAX_ERROR for error in errors) < wanted:
+        n_steps = math.ceil(k * duration / kh)
+        if n_steps > MAX_RUN_STEPS:
+            note = f"stopped at {MAX_RUN_STEPS} steps per run"
+            break
+        solution = integrator.solve(problem, step_s=duration / n_steps, monitor=False)
+        error = math.inf
+        if solution.status == STATUS_OK:
+            error = float(np.hypot(*(solution.y[-1, :2] - reference[:2])) / params.amplitude_m)
+        steps.append(duration / n_steps)
+        errors.append(error)
+        if error < FLOOR_ERROR:
+            break
+        kh *= 0.5
+    h, e = np.array(steps), np.array(errors)
+    return OrderMeasurement(h, e, observed_order(h, e), note)
+
+
+# --- the checks ------------------------------------------------------------------------------------------------
+
+
+def check_order(integrator: Integrator, model: Model) -> Check:
+    name = f"order on {model.name}"
+    if integrator.adaptive or integrator.order is None:
+        why = "adaptive: error against tolerance is no order" if integrator.adaptive else "no order declared"
+        return Check(name, None, why)
+    measured = measure_order(integrator, model)
+    points = ", ".join(f"{error:.1e}" for error in measured.errors[np.isfinite(measured.errors)][-4:])
+    detail = (f"observed {measured.order:.2f}, declared {integrator.order} (±{ORDER_TOLERANCE}); "
+              f"{measured.errors.size} steps down to kh = {measured.step_sizes_s[-1] * ORDER_PARAMS.pendulum_frequency_rad_s:.2g}, "
+              f"finest errors {points}" + (f"; {measured.note}" if measured.note else ""))
+    return Check(name, bool(abs(measured.order - integrator.order) <= ORDER_TOLERANCE), detail)
+
+
+def oscillator_run(integrator: Integrator, kh: float, n_steps: int, params: PendulumParameters = OSCILLATOR):
+    """``n_steps`` steps of k·h = ``kh`` on the linear model (the undamped oscillator when Ω_E = 0)."""
+    h = kh / params.pendulum_frequency_rad_s
+    problem = Problem(MODELS["linear"], params, np.array([0.0, n_steps * h]))
+    return integrator.solve(problem, step_s=h)
+
+
+def check_stability(integrator: Integrator) -> list[Check]:
+    limit = integrator.stability_limit_kh
+    if limit is None:
+        return [Check("stability limit", None, "no stability limit declared")]
+    below_kh, above_kh = limit * (1 - STABILITY_MARGIN), limit * (1 + STABILITY_MARGIN)
+    below = oscillator_run(integrator, below_kh, STABILITY_STEPS)
+    longer = oscillator_run(integrator, below_kh, 2 * STABILITY_STEPS)
+    if below.status != STATUS_OK or longer.status != STATUS_OK:
+        stable = Check("stable below the limit", False,
+                       f"kh = {below_kh:.4g}: status {below.status}/{longer.status} ({below.message or longer.message})")
+    else:
+        first = below.streamed.energy_max_rel_error
+        second = longer.streamed.energy_max_rel_error
+        stable = Check("stable below the limit", bool(second <= first * (1 + GROWTH_ALLOWANCE) + ROUND_OFF_GROWTH),
+                       f"kh = {below_kh:.4g}: max energy error {first:.3e} after {STABILITY_STEPS} steps, "
+                       f"{second:.3e} after {2 * STABILITY_STEPS}")
+    above = oscillator_run(integrator, above_kh, STABILITY_STEPS)
+    diverges = Check("diverges above the limit", above.status == STATUS_DIVERGED,
+                     f"kh = {above_kh:.4g}: status {above.status} after {STABILITY_STEPS} steps"
+                     + (f" ({above.message})" if above.message else ""))
+    return [stable, diverges]
+
+
+def _setting(integrator: Integrator, params: PendulumParameters) -> dict:
+    """A moderate setting: ``SHORT_RUN_TOL``, or kh = ``SHORT_RUN_KH`` (at most half the stability limit)."""
+    if integrator.adaptive:
+        return {"tol": SHORT_RUN_TOL}
+    limit = integrator.stability_limit_kh
+    kh = SHORT_RUN_KH if limit is None else min(SHORT_RUN_KH, 0.5 * limit)
+    return {"step_s": kh / params.pendulum_frequency_rad_s}
+
+
+def check_counters_and_turning_points(integrator: Integrator) -> list[Check]:
+    grid = np.linspace(0.0, SHORT_RUN_PERIODS * SHORT_RUN.small_swing_period_s, round(8 * SHORT_RUN_PERIODS) + 1)
+    solution = integrator.solve(Problem(MODELS["linear"], SHORT_RUN, grid), **_setting(integrator, SHORT_RUN))
+    if solution.status != STATUS_OK:
+        failed = f"status {solution.status}: {solution.message}"
+        return [Check("counters", False, failed), Check("turning points", False, failed)]
+    problems = []
+    nfev_optional = not integrator.adaptive and integrator.stages is None
+    if not (isinstance(solution.nfev, int) and solution.nfev > 0) and not (nfev_optional and solution.nfev is None):
+        problems.append(f"nfev = {solution.nfev!r}")
+    if not integrator.adaptive:
+        if not (isinstance(solution.steps, int) and solution.steps > 0):
+            problems.append(f"steps = {solution.steps!r}")
+        elif integrator.stages is not None and solution.nfev != integrator.stages * solution.steps:
+            problems.append(f"nfev = {solution.nfev} ≠ stages × steps = {integrator.stages} × {solution.steps}")
+        if not (solution.step_size_s and solution.step_size_s > 0):
+            problems.append(f"step_size_s = {solution.step_size_s!r}")
+    elif solution.tolerance != SHORT_RUN_TOL:
+        problems.append(f"tolerance = {solution.tolerance!r}")
+    counters = ", ".join(f"{name} = {getattr(solution, name)}" for name in ("nfev", "njev", "steps", "rejected_steps"))
+    counter_check = Check("counters", not problems, "; ".join(problems) if problems else counters)
+    expected = math.floor(2 * SHORT_RUN_PERIODS)
+    if solution.streamed is None:
+        turning = Check("turning points", None, "none streamed (optional: the verdicts use the output grid)")
+    else:
+        found = len(solution.streamed.turning_points)
+        turning = Check("turning points", found == expected,
+                        f"{found} streamed over {SHORT_RUN_PERIODS} periods, expected {expected}")
+    return [counter_check, turning]
+
+
+def check_bad_runs_are_rows(integrator: Integrator) -> list[Check]:
+    checks = []
+    for name, model, accepted in (("divergence is a row", BLOW_UP, (STATUS_DIVERGED, STATUS_FAILED)),
+                                  ("failure is a row", FAILING, (STATUS_FAILED,))):
+        grid = np.linspace(0.0, BLOW_UP_PARAMS.small_swing_period_s, 9)
+        solution = integrator.solve(Problem(model, BLOW_UP_PARAMS, grid), **_setting(integrator, BLOW_UP_PARAMS))
+        nan_tail = bool(np.all(np.isnan(solution.y[-1])))
+        holds = solution.status in accepted and bool(solution.message) and nan_tail
+        message = solution.message.splitlines()[0] if solution.message else "no message"
+        checks.append(Check(name, holds, f"{model.title}: status {solution.status}, last row "
+                                         f"{'NaN' if nan_tail else 'finite'}; {message}"))
+    return checks
+
+
+def _guarded(name: str, check: Callable[[], Check | list[Check]]) -> list[Check]:
+    """Run one check; an exception escaping the integrator is itself a failed check (runs must be rows)."""
+    try:
+        result = check()
+    except Exception as error:  # the point of the check: report it, do not crash
+        return [Check(name, False, f"raised {type(error).__name__}: {str(error).splitlines()[0] if str(error) else ''}")]
+    return result if isinstance(result, list) else [result]
+
+
+def iter_checks(integrator: Integrator) -> Iterator[Check]:
+    """Every conformance check of ``integrator`` (module docstring), in order, as each completes."""
+    for model in MODELS.values():
+        yield from _guarded(f"order on {model.name}", lambda model=model: check_order(integrator, model))
+    yield from _guarded("stability limit", lambda: check_stability(integrator))
+    yield from _guarded("counters", lambda: check_counters_and_turning_points(integrator))
+    yield from _guarded("bad runs are rows", lambda: check_bad_runs_are_rows(integrator))
+
+
+def run_checks(integrator: Integrator) -> list[Check]:
+    """``iter_checks`` as a list."""
+    return list(iter_checks(integrator))

@@ -1,0 +1,127 @@
+"""An installed entry-point plug-in of a new family: it is loaded, checked by ``selftest``, enters the code
+version, and the project's own tests still pass with it installed.
+
+The plug-in is installed the way pip would leave it, without pip: a module and a ``*.dist-info`` folder with
+an ``entry_points.txt`` in a temporary directory put on ``PYTHONPATH`` of a subprocess (``importlib.metadata``
+finds distributions on ``sys.path``). It is an explicit midpoint rule (Runge 1895; Hairer, Nørsett & Wanner,
+Solving ODEs I, §II.1): order 2, 2 stages, unstable on the undamped oscillator at every step
+(|R(ikh)|² = 1 + (kh)⁴/4 > 1), of a family no built-in matrix lists.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+PLUGIN_SOURCE = '''
+"""A toy plug-in for the tests: the explicit midpoint rule."""
+
+from typing import Callable, ClassVar
+
+from foucault_bench.integrators import FixedStepIntegrator, register
+from foucault_bench.models.jit import jit
+
+
+@register
+class ToyMidpoint(FixedStepIntegrator):
+    name: ClassVar[str] = "toy_midpoint"
+    family: ClassVar[str] = "toy-family"
+    order: ClassVar[int] = 2
+    stages: ClassVar[int] = 2
+    reference: ClassVar[str] = "Hairer, Nørsett & Wanner, Solving ODEs I, §II.1"
+
+    def make_step(self, model) -> Callable:
+        acceleration = model.numba_acceleration
+
+        @jit
+        def step(x, y, vx, vy, h, p):
+            ax, ay = acceleration(x, y, vx, vy, p)
+            xm, ym, vxm, vym = x + 0.5 * h * vx, y + 0.5 * h * vy, vx + 0.5 * h * ax, vy + 0.5 * h * ay
+            axm, aym = acceleration(xm, ym, vxm, vym, p)
+            return x + h * vxm, y + h * vym, vx + h * axm, vy + h * aym
+
+        return step
+'''
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory) -> Path:
+    """A directory holding the plug-in module and its distribution metadata, as an installer leaves them."""
+    site = tmp_path_factory.mktemp("site")
+    (site / "toy_plugin.py").write_text(PLUGIN_SOURCE, encoding="utf-8")
+    dist_info = site / "toy_plugin-0.1.dist-info"
+    dist_info.mkdir()
+    (dist_info / "METADATA").write_text("Metadata-Version: 2.1\nName: toy-plugin\nVersion: 0.1\n", encoding="utf-8")
+    (dist_info / "entry_points.txt").write_text("[foucault_bench.integrators]\ntoy_midpoint = toy_plugin\n",
+                                                encoding="utf-8")
+    return site
+
+
+def run(site: Path | None, *argv: str, timeout: float = 600) -> subprocess.CompletedProcess:
+    environment = dict(os.environ)
+    paths = [str(site)] if site else []
+    environment["PYTHONPATH"] = os.pathsep.join(paths + [environment.get("PYTHONPATH", "")]).strip(os.pathsep)
+    return subprocess.run([sys.executable, *argv], cwd=ROOT, env=environment, capture_output=True, text=True,
+                          timeout=timeout)
+
+
+PROBE = textwrap.dedent("""
+    from foucault_bench.integrators import REGISTRY, is_built_in
+    from foucault_bench.integrators.registry import ENTRY_POINT_MODULES
+    from foucault_bench.bench.run.provenance import code_version
+    toy = REGISTRY.get("toy_midpoint")
+    print(toy is not None and not is_built_in(toy), toy and toy.family, ENTRY_POINT_MODULES, code_version())
+""")
+
+
+def test_entry_point_plug_in_is_loaded_and_enters_the_code_version(site: Path) -> None:
+    without = run(None, "-c", PROBE)
+    first = run(site, "-c", PROBE)
+    assert first.returncode == 0 and without.returncode == 0, first.stderr + without.stderr
+    loaded, family, modules, version = first.stdout.split(maxsplit=3)
+    assert (loaded, family, modules) == ("True", "toy-family", "['toy_plugin']"), first.stdout
+    assert without.stdout.split()[0] == "False"
+    plugin = site / "toy_plugin.py"
+    original = plugin.read_text(encoding="utf-8")
+    plugin.write_text(original + "\n# edited\n", encoding="utf-8")
+    try:
+        edited = run(site, "-c", PROBE)
+    finally:
+        plugin.write_text(original, encoding="utf-8")
+    assert len({version, edited.stdout.split()[-1], without.stdout.split()[-1]}) == 3  # --resume cannot reuse rows
+
+
+def test_selftest_checks_the_installed_plug_in(site: Path) -> None:
+    result = run(site, "-m", "foucault_bench.bench.cli", "selftest", "toy_midpoint")
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "ok    order on spherical: observed" in result.stdout
+    assert "skip  stability limit" in result.stdout
+
+
+def test_the_project_suite_still_passes_with_the_plug_in_installed(site: Path) -> None:
+    """The tests that enumerate the registry or assert what the built-in matrices cover."""
+    result = run(site, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/test_matrix.py",
+                 "tests/test_fixed_step.py", "tests/test_selftest.py", "tests/test_adaptive.py::test_declares_its_facts",
+                 "tests/test_adaptive.py::test_the_library_drivers_are_discovered")
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-2000:]
+
+
+def test_a_broken_entry_point_plug_in_is_reported_not_fatal(tmp_path: Path) -> None:
+    dist_info = tmp_path / "broken_plugin-0.1.dist-info"
+    dist_info.mkdir()
+    (dist_info / "METADATA").write_text("Metadata-Version: 2.1\nName: broken-plugin\nVersion: 0.1\n", encoding="utf-8")
+    (dist_info / "entry_points.txt").write_text("[foucault_bench.integrators]\nbroken = no_such_plugin_module\n",
+                                                encoding="utf-8")
+    probe = ("from foucault_bench.integrators import REGISTRY\n"
+             "from foucault_bench.integrators.registry import ENTRY_POINT_ERRORS\n"
+             "print('rk4' in REGISTRY, sorted(ENTRY_POINT_ERRORS))")
+    result = run(tmp_path, "-c", probe)
+    assert result.returncode == 0 and result.stdout.split() == ["True", "['broken']"], result.stdout + result.stderr
+    assert "integrator plug-in 'broken'" in result.stderr and "No module named 'no_such_plugin_module'" in result.stderr

@@ -1,0 +1,72 @@
+"""``foucault-bench selftest``: the conformance check passes on every built-in integrator and fails on the
+deliberately wrong ones of ``tests/check_mutants.py``; bad input exits 2 with one line and no traceback."""
+
+from __future__ import annotations
+
+import pytest
+
+from foucault_bench.bench.cli import main
+from foucault_bench.bench.gate.conformance import run_checks
+from foucault_bench.integrators import REGISTRY, built_in_names, get_integrator, unregister
+
+MUTANT_PLUGIN = "check_mutants"
+
+
+@pytest.fixture(scope="module")
+def mutants():
+    """The mutants registered for this module only (``check_mutants`` registers them when imported)."""
+    import check_mutants
+
+    for cls in (check_mutants.RK4WrongWeights, check_mutants.VerletNaiveCoriolis):
+        REGISTRY.setdefault(cls.name, cls())
+    yield check_mutants.MUTANT_NAMES
+    for name in check_mutants.MUTANT_NAMES:
+        unregister(name)
+
+
+def run_cli(argv: list[str], capsys) -> tuple[int, str, str]:
+    status = main(argv)
+    captured = capsys.readouterr()
+    return status, captured.out, captured.err
+
+
+@pytest.mark.parametrize("name", built_in_names())
+def test_every_built_in_integrator_conforms_to_what_it_declares(name: str) -> None:
+    checks = run_checks(get_integrator(name))
+    failed = [f"{check.name}: {check.detail}" for check in checks if check.holds is False]
+    assert not failed, failed
+    applied = {check.name for check in checks if check.holds}
+    assert {"counters", "divergence is a row", "failure is a row"} <= applied
+    integrator = get_integrator(name)
+    if not integrator.adaptive and integrator.order is not None:
+        assert {"order on linear", "order on seed_planar", "order on spherical"} <= applied
+    if integrator.stability_limit_kh is not None:
+        assert {"stable below the limit", "diverges above the limit"} <= applied
+
+
+def test_each_mutant_fails_its_declared_order(mutants) -> None:
+    for name in mutants:
+        checks = {check.name: check for check in run_checks(get_integrator(name))}
+        assert checks["order on linear"].holds is False, checks["order on linear"]
+        assert checks["failure is a row"].holds and checks["divergence is a row"].holds
+
+
+def test_command_prints_one_line_per_check_and_exits_0_or_1(mutants, capsys) -> None:
+    status, out, err = run_cli(["selftest", "verlet"], capsys)
+    lines = out.splitlines()
+    assert status == 0, out + err
+    assert len(lines) == len(run_checks(get_integrator("verlet"))) + 1 and lines[-1].startswith("verlet: ")
+    assert all(line.split()[0] in ("ok", "skip") for line in lines[:-1])
+    status, out, err = run_cli(["selftest", "rk4_wrong_weights", "--plugin", MUTANT_PLUGIN], capsys)
+    assert status == 1 and "FAIL  order on linear" in out, out + err
+
+
+@pytest.mark.parametrize("argv, expected", [
+    (["selftest", "rk5"], "unknown integrator 'rk5' (did you mean 'rk4'?)"),
+    (["selftest", "rk4", "--plugin", "no_such_module_here"], "cannot import 'no_such_module_here'"),
+    (["selftest", "rk4", "--plugin", "json"], "module 'json' registers no integrator"),
+])
+def test_bad_input_exits_2_with_one_line(argv, expected, capsys) -> None:
+    status, out, err = run_cli(argv, capsys)
+    assert status == 2 and out == ""
+    assert err.count("\n") == 1 and expected in err and "Traceback" not in err, err
