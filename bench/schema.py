@@ -1,8 +1,9 @@
 """The results table: one row per run (scene × integrator × setting), its columns, types and units.
 
-This is the contract between the runner (which writes rows), the results store (SQLite), the reports and
-the threshold checks. Every column is documented here once; the README's column table is generated from
-``COLUMNS`` (``python -m foucault_bench.bench.schema``). Errors are dimensionless unless a unit is given.
+This is the contract between the runner (which writes rows), the results store (SQLite), the reports and the
+threshold checks. Every column is documented here once; the column table of bench/README.md "Results table" is
+generated from ``COLUMNS`` (``python -m foucault_bench.bench.schema``; ``tests/test_docs.py`` keeps them equal).
+Errors are dimensionless unless a unit is given.
 
 Each row also carries the integrator's declared facts (``DECLARED_FACTS``: family, order, stages, adaptive,
 stability limit) as they were when the run was made, so that reading results never needs the integrator's
@@ -132,9 +133,9 @@ def is_present(value: Any) -> bool:
 
 
 def markdown_table() -> str:
-    """The column table for the README."""
+    """The column table of bench/README.md "Results table" (``|`` in a description escaped for Markdown)."""
     lines = ["| column | unit | meaning |", "|---|---|---|"]
-    lines += [f"| `{c.name}` | {c.unit or '–'} | {c.description} |" for c in COLUMNS]
+    lines += [f"| `{c.name}` | {c.unit or '–'} | {c.description.replace('|', chr(92) + '|')} |" for c in COLUMNS]
     return "\n".join(lines)
 
 

@@ -1,10 +1,15 @@
 """``foucault-bench report``: build the report folder (index.html, REPORT.md, figures, tables) from results.
 
     foucault-bench report [--db PATH] [--matrix-id ID] [--out DIR] [--studies {stored,recompute,skip}]
+                          [--targets ERROR ...]
 
-The folder opens in a browser with no server: index.html and REPORT.md hold the same blocks
-(``reports.document``), figures are PNG + SVG files under ``figures/``, tables are embedded and written under
-``tables/`` as CSV, Markdown, LaTeX and HTML. The study tables (``reports.studies``) are read from the database
+The folder opens in a browser with no server and no network: index.html and REPORT.md hold the same blocks
+(``reports.document``); in index.html every chart of the results and studies is interactive (plotly,
+``reports.interactive``; plotly.js is written beside it), and each links its static PNG + SVG files under
+``figures/`` (``reports.charts``, matplotlib, for papers; REPORT.md shows these). Tables are embedded and
+written under ``tables/`` as CSV, Markdown, LaTeX and HTML. The summary answers which integrator and setting
+is cheapest per scene at each target error (``--targets``, default 1e-3 1e-6 1e-9), with the Pareto fronts of
+every error metric (``bench.verdicts.pareto``). File names made from scene names go through ``file_stem``. The study tables (``reports.studies``) are read from the database
 and computed (then stored) when missing, or recomputed with ``--studies recompute``; ``--studies skip`` leaves
 their sections out. The seed note's figures (``reports.seed``) are a section of the report.
 
@@ -17,9 +22,10 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import pandas as pd
+from matplotlib.figure import Figure as MplFigure
 from tqdm import tqdm
 
 from foucault_bench.bench.errors import InputError
@@ -28,9 +34,14 @@ from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.reports.studies import STUDIES, ensure_studies
 from foucault_bench.integrators import STATUS_OK
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
-from foucault_bench.reports import charts, tables
+from foucault_bench.bench.problems.scenes import SCENES
+from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS, cost_column, pareto_front
+from foucault_bench.reports import charts, interactive, tables
 from foucault_bench.reports.document import Block, Figure, Heading, Paragraph, Table, write_document, write_table_files
 from foucault_bench.reports.seed import seed_blocks
+
+if TYPE_CHECKING:
+    from plotly.graph_objects import Figure as PlotlyFigure
 
 FIGURES = "figures"
 TABLES = "tables"
@@ -47,6 +58,8 @@ class ReportInputs:
             trajectory_gap, note), possibly empty.
         provenance: label → value lines shown at the top (matrix id, host, commit, ...).
         include_seed: add the seed-revisited section (computes the seed study, a few seconds).
+        targets: target reference errors of the matched-accuracy summary.
+        interactive: draw the charts of index.html with plotly (else the static PNGs only).
     """
 
     runs: pd.DataFrame
@@ -54,23 +67,59 @@ class ReportInputs:
     adequacy: pd.DataFrame = field(default_factory=pd.DataFrame)
     provenance: dict[str, str] = field(default_factory=dict)
     include_seed: bool = True
+    targets: tuple[float, ...] = DEFAULT_TARGETS
+    interactive: bool = True
+
+
+def file_stem(name: str) -> str:
+    """A file-name part for a scene name, the same on every file system and distinct for distinct names.
+
+    Scene names hold letters, digits, ``_``, ``.`` and ``-`` (``bench.problems.scenes.SCENE_NAME_PATTERN``).
+    A dot would start a file suffix (``seed_v1.5`` and ``seed_v1.6`` would share ``seed_v1``), and names that
+    differ only in case collide on case-insensitive file systems, so ``-`` escapes: ``-`` → ``--``, ``.`` →
+    ``-_``, an upper-case letter X → ``-x``. The escape is prefix-free, hence one-to-one; lower-case names
+    without dots or dashes (every built-in scene) are unchanged."""
+    parts = []
+    for character in name:
+        if character == "-":
+            parts.append("--")
+        elif character == ".":
+            parts.append("-_")
+        elif character.isupper():
+            parts.append("-" + character.lower())
+        else:
+            parts.append(character)
+    return "".join(parts)
 
 
 class _Builder:
     """Collects blocks while writing the figures and tables they point to."""
 
-    def __init__(self, folder: Path, progress: bool):
+    def __init__(self, folder: Path, progress: bool, interactive: bool):
         self.folder = folder
         self.blocks: list[Block] = []
+        self.interactive = interactive
         self.progress = tqdm(desc="report figures", unit="figure", disable=not progress, leave=False)
 
     def add(self, *blocks: Block) -> None:
         self.blocks.extend(blocks)
 
-    def figure(self, draw: Callable[..., Path], name: str, caption: str, *data: object) -> None:
-        draw(*data, self.folder / FIGURES / name)
+    def figure(self, name: str, caption: str, draw: Callable[[Path], Path],
+               draw_interactive: Callable[[], PlotlyFigure] | None = None) -> None:
+        """Write the static chart ``draw(stem)`` under figures/ and, when the report is interactive, add the
+        plotly figure ``draw_interactive()`` to the page."""
+        draw(self.folder / FIGURES / name)
         self.progress.update()
-        self.add(Figure(f"{FIGURES}/{name}", caption))
+        if self.interactive and draw_interactive is not None:
+            plot = draw_interactive()
+            self.add(Figure(f"{FIGURES}/{name}", caption, plot.to_json(), interactive.drawn_points(plot)))
+        else:
+            self.add(Figure(f"{FIGURES}/{name}", caption))
+
+    def curves(self, name: str, caption: str, figure: MplFigure) -> None:
+        """A chart of curves drawn with matplotlib: saved under figures/, and on the page converted to plotly
+        (``interactive.from_matplotlib``)."""
+        self.figure(name, caption, lambda stem: charts.save(figure, stem), lambda: interactive.from_matplotlib(figure))
 
     def table(self, frame: pd.DataFrame, name: str, title: str, notes: dict[str, str] | None = None) -> None:
         shown = write_table_files(frame, self.folder, f"{TABLES}/{name}", title, tables.INTEGER_COLUMNS)
@@ -80,6 +129,11 @@ class _Builder:
 # --------------------------------------------------------------------------------------------------------------
 # sections
 # --------------------------------------------------------------------------------------------------------------
+def _cost_words(runs: pd.DataFrame) -> str:
+    return ("CPU time (median of the timed repeats)" if cost_column(runs) == "cpu_time_s"
+            else "wall time (median of the timed repeats; these results have no CPU time)")
+
+
 def _overview(builder: _Builder, inputs: ReportInputs) -> None:
     runs = inputs.runs
     counts = runs["status"].value_counts()
@@ -93,31 +147,60 @@ def _overview(builder: _Builder, inputs: ReportInputs) -> None:
     builder.add(Paragraph(
         "How to read the charts: colour = integrator family (the same in every chart), marker and line pattern = "
         "integrator within its family, solid-type lines = fixed-step sweeps (k·h), dashed-type lines = tolerance "
-        "sweeps. Runs that diverged (▲) or "
-        "failed (✕) are drawn on the top edge of the axes at their cost (left edge when the cost is unknown); "
-        "an ok run without a finite positive value is drawn on the bottom edge (▽). Errors are dimensionless: "
-        "positions relative to the amplitude A, energies relative to the swing's energy, precession rates "
-        "relative to Ω_E|sin φ|. Frame x South, y East, z Up; latitude φ north positive; rates "
-        "counter-clockwise about up positive (the textbook rate is −Ω_E sin φ)."))
+        f"sweeps. Cost is {_cost_words(runs)}; the bars across a point span the spread (max − min) of the "
+        "timed repeats. The thick grey staircase is the Pareto front: the runs no other run beats on both cost "
+        "and error. Runs that diverged (▲) or failed (✕) are drawn above the data at their cost (static charts: "
+        "on the top edge; left edge when the cost is unknown); an ok run without a finite positive value is "
+        "drawn on the bottom edge (▽) of the static charts. In this page, hovering a point shows its run "
+        "(integrator, family, setting, error, CPU and wall time, evaluations, steps, status), clicking a legend "
+        "entry hides that integrator and clicking 'all <family>' hides the family (double click: show only "
+        "that entry); the static PNG and SVG files for papers are linked under each chart. "
+        "Errors are dimensionless: positions relative to the amplitude A, energies relative to the swing's "
+        "energy, precession rates relative to Ω_E|sin φ|. Frame x South, y East, z Up; latitude φ north "
+        "positive; rates counter-clockwise about up positive (the textbook rate is −Ω_E sin φ)."))
+    names = sorted(runs["scene"].unique())
+    builder.add(Heading("Scenes", level=3))
+    builder.table(tables.scenes_table([SCENES[name] for name in names if name in SCENES], names), "scenes",
+                  "The scenes: place, pendulum, release, grid, model and why")
 
 
-def _summary_tables(builder: _Builder, runs: pd.DataFrame) -> None:
+def _decisions(builder: _Builder, runs: pd.DataFrame, targets: tuple[float, ...]) -> None:
     builder.add(Heading("Summary at matched accuracy"), Paragraph(
-        f"For each scene and integrator, the cheapest setting (least median wall time) whose reference error "
-        f"reaches {tables.MATCHED_ACCURACY_TARGET:g} (max |r − r_ref| / A over the output grid), its cost, or "
-        "'not reached'. The counts show every diverged and failed run."))
-    builder.table(tables.matched_accuracy(runs), "matched_accuracy",
-                  f"Cheapest setting reaching reference error ≤ {tables.MATCHED_ACCURACY_TARGET:g}")
-    builder.add(Heading("Shootout"), Paragraph(
-        "Per scene, integrators ranked by their best efficiency 1 / (reference error × wall time) over their "
-        "settings (higher is better; wall time is the median of the timed repeats, compile time excluded). "
-        "Integrators with no ok run are listed last with their counts."))
-    builder.table(tables.shootout(runs), "shootout", "Shootout: efficiency ranking per scene")
+        f"Per scene and target reference error (max |r − r_ref| / A over the output grid), the cheapest run "
+        f"of any integrator and setting that meets it, by {_cost_words(runs)}; the runner-up is the cheapest run "
+        "of another integrator meeting the same target and the ratio is its cost over the winner's. "
+        "`foucault-bench advise` answers the same question for one scene and any target, and runs a small search "
+        "when no stored run meets it."))
+    builder.table(tables.matched_accuracy(runs, targets), "matched_accuracy",
+                  "Cheapest integrator and setting per scene and target, runner-up and cost ratio")
+    builder.add(Paragraph(
+        f"Per scene and integrator, its cheapest setting reaching {tables.MATCHED_ACCURACY_TARGET:g}, or "
+        "'not reached'; the counts show every diverged and failed run."))
+    builder.table(tables.per_integrator(runs), "per_integrator",
+                  f"Cheapest setting of each integrator reaching reference error ≤ {tables.MATCHED_ACCURACY_TARGET:g}")
+    builder.add(Heading("Pareto fronts"), Paragraph(
+        "For each scene and error metric, the runs that no other run beats on both cost and error, across "
+        "every integrator and setting, cheapest first (bench.verdicts.pareto): read down a scene's rows to "
+        "see which integrator is the cheapest way to each accuracy. Below, each family's most accurate run and "
+        "how many points of the front it holds."))
+    fronts, families = tables.fronts(runs), tables.families(runs)
+    for frame, stem, title in ((fronts, "pareto_fronts", "Pareto-efficient runs per scene (reference error)"),
+                               (families, "best_of_family", "Best run of each family per scene (reference error)")):
+        builder.table(frame[frame["metric"] == "reference_error"] if not frame.empty else frame, stem, title)
+        write_table_files(frame, builder.folder, f"{TABLES}/{stem}_all_metrics", f"{title[:title.index(' (')]}, "
+                          "every error metric", tables.INTEGER_COLUMNS)
+    builder.add(Paragraph(
+        f"The same for every error metric (energy error and drift, precession-rate error, analytic gap): "
+        f"`{TABLES}/pareto_fronts_all_metrics.csv` and `{TABLES}/best_of_family_all_metrics.csv` (also .md, .tex, "
+        ".html)."))
 
 
 def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
     builder.add(Heading("Work-precision"), Paragraph(
-        "Each verdict against the two costs, wall time and right-hand-side evaluations, one line per integrator. "
+        "Each verdict against two costs, one line per integrator: time (median of the timed repeats, compile "
+        "time excluded; the bar across a point spans max − min of the repeats), and the accepted steps, counted "
+        "for every family (what one step costs differs: s right-hand-side evaluations for a Runge-Kutta method, "
+        "one corrector solve for a multistep method, one order-p Taylor expansion for heyoka). "
         "The energy error is the largest deviation over the run; the energy drift its least-squares trend, "
         "which tells a drifting integrator from one whose error oscillates within a bound. "
         "The precession-rate error is the integrator's own: measured rate against the reference solution's rate "
@@ -129,24 +212,41 @@ def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
             if not scene_runs[verdict].notna().any() and (scene_runs["status"] == STATUS_OK).any():
                 builder.add(Paragraph(f"{scene}: no {title} values in the results ({verdict} is empty)."))
                 continue
-            builder.figure(charts.work_precision, f"work_precision_{scene}_{verdict}",
-                           f"{scene}: {title} ({label}) against wall time and right-hand-side evaluations.",
-                           scene_runs, verdict)
+            front = pareto_front(scene_runs, verdict)
+            builder.figure(f"work_precision_{file_stem(scene)}_{verdict}",
+                           f"{scene}: {title} ({label}) against time and accepted steps; grey "
+                           f"staircase: Pareto front ({len(front)} runs).",
+                           lambda stem: charts.work_precision(scene_runs, verdict, front, stem),
+                           lambda: interactive.work_precision(scene_runs, verdict, front))
 
 
 def _convergence(builder: _Builder, runs: pd.DataFrame) -> None:
     orders = tables.convergence_orders(runs)
     builder.add(Heading("Convergence"), Paragraph(
-        "Reference error against step size for the fixed-step integrators; the fitted order "
-        "(bench.verdicts.convergence.observed_order: least-squares slope over the finest steps, after dropping saturated "
-        "errors above 0.1 and round-off-dominated points) is in the legend and in the table next to the "
+        "Reference error against k·h (the step in units of 1/k = √(L/g), the unit of matrices and thresholds) "
+        "for the fixed-step integrators, with a dotted reference slope for each declared order. The fitted "
+        "order (bench.verdicts.convergence.observed_order: least-squares slope over the finest points of the "
+        "longest stretch whose local slopes agree, after dropping saturated errors above 0.1; a round-off floor "
+        "and a pre-asymptotic start fall outside that stretch) is in the legend and in the table next to the "
         "declared order."))
     builder.table(orders, "convergence_orders", "Observed and declared orders of convergence")
     for scene, scene_runs in runs.groupby("scene", sort=True):
         if scene_runs["tol"].isna().any():
-            builder.figure(charts.convergence, f"convergence_{scene}",
-                           f"{scene}: reference error against step size, fitted order in the legend.",
-                           scene_runs, tables.orders_by_integrator(orders, scene))
+            scene_orders = tables.orders_by_integrator(orders, scene)
+            builder.figure(f"convergence_{file_stem(scene)}",
+                           f"{scene}: reference error against k·h, fitted order in the legend.",
+                           lambda stem: charts.convergence(scene_runs, scene_orders, stem),
+                           lambda: interactive.convergence(scene_runs, scene_orders))
+    builder.add(Heading("Tolerance against achieved error"), Paragraph(
+        "For the adaptive integrators, the reference error reached against the tolerance asked for: a line "
+        "below the dotted diagonal delivers more than asked, above it less. Libraries map a tolerance to their "
+        "own error control differently (integrators/adaptive.py), so equal tolerances are not equal work."))
+    for scene, scene_runs in runs.groupby("scene", sort=True):
+        if scene_runs["tol"].notna().any():
+            builder.figure(f"tolerance_{file_stem(scene)}",
+                           f"{scene}: reference error against requested tolerance (adaptive integrators).",
+                           lambda stem: charts.tolerance(scene_runs, stem),
+                           lambda: interactive.tolerance(scene_runs))
 
 
 def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
@@ -159,8 +259,8 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
             "Expected: explicit Euler grows as (1 + (kh)²)ⁿ until it diverges, RK4 drifts linearly, Verlet stays "
             "bounded near (kh)²/4, CVODE and heyoka stay near round-off at tight tolerances. "
             f"Values below {charts.LOG_FLOOR:g} (exact zeros included) are drawn at {charts.LOG_FLOOR:g}."))
-        builder.figure(charts.long_time_energy, "study_long_time_energy",
-                       "Relative energy error against time (log-log), per integrator family.", energy)
+        builder.curves("study_long_time_energy", "Relative energy error against time (log-log), per integrator family.",
+                       charts.long_time_energy(energy))
         builder.table(tables.long_time_summary(energy), "study_long_time_energy_summary",
                       "Long-time energy: error after the first hour and at the end")
     stability = studies.get("study_stability")
@@ -175,12 +275,12 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
             "in the second chart. At exactly kh = 2 Verlet's and symplectic Euler's oscillator matrices have the "
             "double eigenvalue −1: the amplitude grows linearly rather than exponentially, which is why the "
             "curves dip or end there."))
-        builder.figure(charts.stability, "study_stability",
-                       "Energy error against k·h across each fixed-step integrator's stability limit, without "
-                       "rotation (solid) and with it (dashed); triangles mark the measured limits.", stability)
-        builder.figure(charts.rotation_growth, "study_stability_rotation_growth",
+        builder.curves("study_stability", "Energy error against k·h across each fixed-step integrator's stability "
+                       "limit, without rotation (solid) and with it (dashed); triangles mark the measured limits.",
+                       charts.stability(stability))
+        builder.curves("study_stability_rotation_growth",
                        "Growth per step with Earth's rotation: measured one-step growth against the declared law.",
-                       stability)
+                       charts.rotation_growth(stability))
         builder.table(tables.stability_summary(stability), "study_stability_summary",
                       "Stability: declared and measured limits, first divergence, growth with rotation")
     precession = studies.get("study_precession_latitude")
@@ -192,9 +292,10 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
             "Taylor batch integrator, one batch element per latitude; study `study_precession_latitude`) against "
             "the textbook −Ω_E sin φ. The residual follows the Airy correction (3/8)θ₀² of the finite swing "
             f"(θ₀ = A/L = {first['config_amplitude_m'] / first['config_length_m']:.3g}); the largest distance from "
-            f"it is {residual:.2g} Ω_E (release-side terms, PHYSICS.md 'Airy precession')."))
-        builder.figure(charts.precession_latitude, "study_precession_latitude",
-                       "Precession rate against latitude; residual from −Ω_E sin φ in units of Ω_E.", precession)
+            f"it is {residual:.2g} Ω_E (release-side terms, docs/models/README.md \"Airy precession\")."))
+        builder.curves("study_precession_latitude",
+                       "Precession rate against latitude; residual from −Ω_E sin φ in units of Ω_E.",
+                       charts.precession_latitude(precession))
 
     azimuth = studies.get("study_release_azimuth")
     if azimuth is not None:
@@ -209,8 +310,9 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
             "its own line, which an East-West release (every real scene's) hides. The implicit midpoint rule is "
             "isotropic but slow by (kh)²/4 of the local rate: its Cayley map shortens both circular modes' "
             "frequencies, and their difference is the precession."))
-        builder.figure(charts.release_azimuth, "study_release_azimuth",
-                       "Precession-rate error relative to Ω_E against the release azimuth, per latitude.", azimuth)
+        builder.curves("study_release_azimuth",
+                       "Precession-rate error relative to Ω_E against the release azimuth, per latitude.",
+                       charts.release_azimuth(azimuth))
 
 
 def _adequacy(builder: _Builder, adequacy: pd.DataFrame) -> None:
@@ -221,7 +323,7 @@ def _adequacy(builder: _Builder, adequacy: pd.DataFrame) -> None:
     builder.add(Paragraph(
         "Per scene, what each simpler model gets wrong compared with the scene's model "
         "(bench.problems.adequacy.model_adequacy)."))
-    builder.figure(charts.adequacy, "model_adequacy", "Model adequacy per scene (log scale).", adequacy)
+    builder.curves("model_adequacy", "Model adequacy per scene (log scale).", charts.adequacy(adequacy))
     builder.table(adequacy, "model_adequacy", "Model adequacy per scene", tables.ADEQUACY_NOTES)
 
 
@@ -244,9 +346,9 @@ def build_report(inputs: ReportInputs, folder: Path, title: str = "foucault-benc
         raise InputError(f"results lack the columns {', '.join(missing)} (see bench/schema.py)")
     if inputs.runs.empty:
         raise InputError("no runs to report on")
-    builder = _Builder(folder, progress)
+    builder = _Builder(folder, progress, inputs.interactive)
     _overview(builder, inputs)
-    _summary_tables(builder, inputs.runs)
+    _decisions(builder, inputs.runs, inputs.targets)
     _work_precision(builder, inputs.runs)
     _convergence(builder, inputs.runs)
     _studies(builder, inputs.studies)
@@ -273,7 +375,8 @@ def _provenance(store: ResultsStore, matrix_id: str) -> dict[str, str]:
     return {label: str(record[key]) for key, label in labels.items() if key in record and pd.notna(record[key])}
 
 
-def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "stored") -> int:
+def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "stored",
+                 targets: tuple[float, ...] = DEFAULT_TARGETS) -> int:
     """``foucault-bench report``: the report of matrix run ``matrix_id`` (``None``: the latest) of database
     ``db`` written to folder ``out``; ``studies`` is ``stored``, ``recompute`` or ``skip``. Exit status 0."""
     started = time.perf_counter()
@@ -286,7 +389,8 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
             raise InputError(f"matrix run {matrix_id} in {db} has no stored runs")
         study_tables = {} if studies == "skip" else ensure_studies(store, recompute=studies == "recompute")
         inputs = ReportInputs(runs=runs, studies=study_tables, adequacy=store.adequacy(matrix_id),
-                              provenance={"database": str(db), **_provenance(store, matrix_id)})
+                              provenance={"database": str(db), **_provenance(store, matrix_id)},
+                              targets=targets)
     html_path, markdown_path = build_report(inputs, out, progress=True)
     print(f"report written: {html_path} and {markdown_path} ({len(runs)} runs, "
           f"{', '.join(STUDIES) if study_tables else 'no studies'}; {time.perf_counter() - started:.1f} s)")

@@ -9,15 +9,20 @@ Conventions shared by every chart:
 * runs that diverged or failed are never dropped: they are drawn as a marker on the top edge of the axes at
   their cost (▲ diverged, ✕ failed; at the left edge when the cost is unknown); an ok run without a finite,
   positive value is drawn on the bottom edge (▽);
-* log axes wherever values span decades; axis labels carry units.
+* log axes wherever values span decades; axis labels carry units;
+* work-precision charts: cost = CPU time where the results have it, else wall time
+  (``bench.verdicts.pareto.cost_column``), the spread of the timed repeats as horizontal bars, the Pareto
+  envelope as a grey staircase, each line's finest setting written at its end.
 
-Figures are built with ``matplotlib.figure.Figure`` (no pyplot state), so importing this module never changes
+``reports.interactive`` draws the same charts for the HTML page from the same ``sweeps``; these are the static
+PNG/SVG files for papers. Figures are built with ``matplotlib.figure.Figure`` (no pyplot state), so importing this module never changes
 the backend an interactive session uses; saving renders with Agg.
 """
 
 from __future__ import annotations
 
 import zlib
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +31,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from foucault_bench.bench.schema import setting_label
+from foucault_bench.bench.verdicts.pareto import cost_column
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
 from foucault_bench.integrators.registry import REGISTRY
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
@@ -143,33 +150,95 @@ def outcome_legend_handles() -> list[Line2D]:
     ]
 
 
-def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str) -> list[Line2D]:
+@dataclass
+class Sweep:
+    """One integrator's runs in a chart of results rows, split by what can be drawn where.
+
+    Attributes:
+        integrator, family: identity; ``adaptive`` is true for a tolerance sweep.
+        points: ok runs with a finite, positive x and y, ordered along the sweep (coarse to fine).
+        no_value: ok runs without a plottable x or y (drawn on the bottom edge).
+        diverged, failed: runs with that status (drawn on the top edge at their x).
+    """
+
+    integrator: str
+    family: str
+    adaptive: bool
+    points: pd.DataFrame
+    no_value: pd.DataFrame
+    diverged: pd.DataFrame
+    failed: pd.DataFrame
+
+    @property
+    def label(self) -> str:
+        """The integrator with its counts of diverged and failed runs."""
+        counts = [f"{len(rows)} {status}" for status, rows in
+                  ((STATUS_DIVERGED, self.diverged), (STATUS_FAILED, self.failed)) if len(rows)]
+        return self.integrator + (f" ({', '.join(counts)})" if counts else "")
+
+
+def sweeps(frame: pd.DataFrame, x_column: str, y_column: str) -> list[Sweep]:
+    """The ``Sweep`` of every integrator in ``frame`` (grouped by family, then name) for a chart of
+    ``y_column`` against ``x_column``; y is taken as |y|."""
+    found = []
+    for integrator, family in _ordered_integrators(frame):
+        rows = frame[frame["integrator"] == integrator]
+        adaptive = bool(rows["tol"].notna().any())
+        ok = rows[rows["status"] == STATUS_OK]
+        x = ok[x_column].to_numpy(dtype=float)
+        y = np.abs(ok[y_column].to_numpy(dtype=float))
+        plottable = np.isfinite(x) & (x > 0) & np.isfinite(y) & (y > 0)
+        points = ok[plottable].assign(**{y_column: y[plottable]})
+        points = points.assign(_along=-points["kh"].fillna(points["tol"])).sort_values("_along", kind="stable")
+        found.append(Sweep(integrator, family, adaptive, points.drop(columns="_along"), ok[~plottable],
+                           rows[rows["status"] == STATUS_DIVERGED], rows[rows["status"] == STATUS_FAILED]))
+    return found
+
+
+def setting_text(row) -> str:
+    """``kh=0.125`` or ``tol=1e-08`` for a results row."""
+    return setting_label(row["kh"], row["tol"])
+
+
+def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str, *, x_spread: str | None = None,
+                labels: bool = True) -> list[Line2D]:
     """One line per integrator through its ok runs in sweep order (largest k·h or tolerance first); diverged and
-    failed runs and ok runs without a plottable value as edge markers. Returns one legend handle per integrator,
+    failed runs and ok runs without a plottable value as edge markers. ``x_spread`` names a column drawn as a
+    horizontal bar of that total length centred on each point (the spread of the timed repeats); ``labels``
+    writes the setting next to the last (finest) point of each line. Returns one legend handle per integrator,
     labelled with its counts of diverged and failed runs."""
     handles = []
     left_slots = {"top": 0, "bottom": 0}
-    for integrator, family in _ordered_integrators(frame):
-        rows = frame[frame["integrator"] == integrator]
-        adaptive = bool(rows["tol"].notna().any()) if "tol" in rows else None
-        style = integrator_style(integrator, family, adaptive)
-        ok = rows[rows["status"] == STATUS_OK]
-        x = ok[x_column].to_numpy(dtype=float)
-        y = ok[y_column].to_numpy(dtype=float)
-        plottable = np.isfinite(x) & (x > 0) & np.isfinite(y) & (y > 0)
-        setting = ok["kh"].fillna(ok["tol"]).to_numpy(dtype=float)[plottable]
-        order = np.argsort(-setting, kind="stable")  # along the sweep: coarse to fine
-        counts = [f"{int((rows['status'] == status).sum())} {status}" for status in (STATUS_DIVERGED, STATUS_FAILED)
-                  if (rows["status"] == status).any()]
-        label = integrator + (f" ({', '.join(counts)})" if counts else "")
-        (line,) = axes.plot(x[plottable][order], y[plottable][order], label=label, markersize=5, **style)
+    for sweep in sweeps(frame, x_column, y_column):
+        style = integrator_style(sweep.integrator, sweep.family, sweep.adaptive)
+        x = sweep.points[x_column].to_numpy(dtype=float)
+        y = sweep.points[y_column].to_numpy(dtype=float)
+        (line,) = axes.plot(x, y, label=sweep.label, markersize=5, **style)
         handles.append(line)
-        left_slots["bottom"] += mark_on_edge(axes, x[~plottable], style["color"], NO_VALUE_MARKER, "bottom",
+        if x_spread is not None and x_spread in sweep.points and sweep.points[x_spread].notna().any():
+            half = 0.5 * sweep.points[x_spread].to_numpy(dtype=float)
+            axes.errorbar(x, y, xerr=np.vstack([np.minimum(half, 0.9 * x), half]), fmt="none",
+                          ecolor=style["color"], elinewidth=0.8, capsize=2, alpha=0.7)
+        if labels and len(x):  # the finest setting, at the end of the line
+            axes.annotate(setting_text(sweep.points.iloc[-1]), (x[-1], y[-1]), fontsize=6.5, color=style["color"],
+                          xytext=(4, 3), textcoords="offset points")
+        no_value = sweep.no_value[x_column].to_numpy(dtype=float)
+        left_slots["bottom"] += mark_on_edge(axes, no_value, style["color"], NO_VALUE_MARKER, "bottom",
                                              left_slots["bottom"])
-        for status, marker in ((STATUS_DIVERGED, DIVERGED_MARKER), (STATUS_FAILED, FAILED_MARKER)):
-            left_slots["top"] += mark_on_edge(axes, rows.loc[rows["status"] == status, x_column].to_numpy(dtype=float),
-                                              style["color"], marker, "top", left_slots["top"])
+        for rows, marker in ((sweep.diverged, DIVERGED_MARKER), (sweep.failed, FAILED_MARKER)):
+            left_slots["top"] += mark_on_edge(axes, rows[x_column].to_numpy(dtype=float), style["color"], marker,
+                                              "top", left_slots["top"])
     return handles
+
+
+def plot_front(axes: Axes, front: pd.DataFrame, cost: str) -> Line2D | None:
+    """The Pareto envelope (``bench.verdicts.pareto.pareto_front``) as a staircase: each front run holds its
+    error until a costlier run does better."""
+    if front.empty:
+        return None
+    (line,) = axes.step(front[cost].to_numpy(float), front["error"].to_numpy(float), where="post", color="black",
+                        linewidth=2.2, alpha=0.35, zorder=1, label="Pareto front (no run is cheaper and more accurate)")
+    return line
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -185,45 +254,84 @@ VERDICT_LABELS: dict[str, tuple[str, str]] = {
 """Verdict column → (short title, axis label) for the work-precision charts (absolute values are plotted)."""
 
 COST_LABELS: dict[str, str] = {
-    "wall_time_s": "wall time per run (s), median of repeats",
-    "nfev": "right-hand-side evaluations (heyoka: Taylor steps)",
+    "cpu_time_s": "CPU time per run (s): median of the timed repeats, bar = max − min",
+    "wall_time_s": "wall time per run (s): median of the timed repeats, bar = max − min",
+    "steps": "accepted steps (one step = s RHS evaluations for Runge-Kutta,\n"
+             "one corrector solve for multistep, one order-p Taylor expansion for heyoka)",
 }
+"""Cost column → axis label of the work-precision charts. Steps are counted for every family, so no method is
+drawn on an axis whose unit does not apply to it (a Taylor step is not a right-hand-side evaluation); what a
+step costs differs by family, which the time panel shows."""
+COST_SPREADS: dict[str, str] = {"cpu_time_s": "cpu_time_spread_s", "wall_time_s": "wall_time_spread_s"}
+"""Cost column → the column holding the spread (max − min) of its timed repeats (drawn as error bars)."""
 
 
-def work_precision(scene_frame: pd.DataFrame, verdict: str, stem: Path) -> Path:
-    """Verdict against wall time and against right-hand-side evaluations for one scene, one line per
-    integrator, fixed-step and tolerance sweeps on the same axes."""
+def cost_axes(frame: pd.DataFrame) -> tuple[str, str]:
+    """The two cost axes of a work-precision chart: time (``pareto.cost_column``) and accepted steps."""
+    return cost_column(frame), "steps"
+
+
+def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame, stem: Path) -> Path:
+    """Verdict against time and against accepted steps for one scene, one line per integrator,
+    fixed-step and tolerance sweeps on the same axes, the time's spread as bars, the Pareto envelope
+    (``front``: ``bench.verdicts.pareto.pareto_front`` rows of this scene and verdict, may be empty) on the
+    time panel."""
     scene = scene_frame["scene"].iloc[0]
     title, label = VERDICT_LABELS[verdict]
-    scene_frame = scene_frame.assign(**{verdict: scene_frame[verdict].abs()})
     figure = Figure(figsize=(13.5, 5.2), layout="constrained")
     axes_pair = figure.subplots(1, 2, sharey=True)
     handles = []
-    for axes, cost in zip(axes_pair, COST_LABELS):
-        handles = plot_sweeps(axes, scene_frame, cost, verdict)
+    time_cost = cost_axes(scene_frame)[0]
+    for axes, cost in zip(axes_pair, cost_axes(scene_frame)):
+        handles = plot_sweeps(axes, scene_frame, cost, verdict, x_spread=COST_SPREADS.get(cost),
+                              labels=cost == time_cost)
         set_log_scales(axes)
         axes.set_xlabel(COST_LABELS[cost])
         axes.grid(True, which="major", alpha=0.3)
+    envelope = plot_front(axes_pair[0], front, time_cost)
     axes_pair[0].set_ylabel(label)
     figure.suptitle(f"{scene}: {title} against cost (lower left is better)", fontsize=12)
-    figure.legend(handles=handles + outcome_legend_handles(), loc="outside right upper", fontsize=9)
+    extra = [envelope] if envelope is not None else []
+    figure.legend(handles=handles + extra + outcome_legend_handles(), loc="outside right upper", fontsize=9)
     return save(figure, stem)
 
 
+def reference_slopes(fixed: pd.DataFrame, points: dict[str, pd.DataFrame]) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """(order, kh, error) of a reference line of slope p for each declared order p of the fixed-step
+    integrators in ``fixed``: through the finest point of the first integrator of that order, at ¼ of its error,
+    over that integrator's range of kh."""
+    lines = []
+    for order in sorted({REGISTRY[name].order for name in fixed["integrator"].unique()
+                         if name in REGISTRY and REGISTRY[name].order}):
+        for name, rows in points.items():
+            if name in REGISTRY and REGISTRY[name].order == order and len(rows) >= 2:
+                kh = rows["kh"].to_numpy(float)
+                finest = int(np.argmin(kh))
+                span = np.array([kh.min(), kh.max()])
+                lines.append((order, span, 0.25 * rows["reference_error"].to_numpy(float)[finest]
+                              * (span / kh[finest]) ** order))
+                break
+    return lines
+
+
 def convergence(scene_frame: pd.DataFrame, orders: dict[str, float], stem: Path) -> Path:
-    """Reference error against step size for the fixed-step integrators of one scene; ``orders`` maps an
-    integrator to its fitted order (shown in the legend)."""
+    """Reference error against k·h for the fixed-step integrators of one scene, with a reference slope for each
+    declared order; ``orders`` maps an integrator to its fitted order (shown in the legend)."""
     scene = scene_frame["scene"].iloc[0]
     fixed = scene_frame[scene_frame["tol"].isna()]
     figure = Figure(figsize=(9.5, 5.2), layout="constrained")
     axes = figure.subplots()
-    handles = plot_sweeps(axes, fixed, "step_s", "reference_error")
-    for handle, (integrator, _) in zip(handles, _ordered_integrators(fixed)):
-        order = orders.get(integrator)
+    handles = plot_sweeps(axes, fixed, "kh", "reference_error")
+    for handle, sweep in zip(handles, sweeps(fixed, "kh", "reference_error")):
+        order = orders.get(sweep.integrator)
         fitted = "no fit" if order is None or not np.isfinite(order) else f"fitted order {order:.2f}"
         handle.set_label(f"{handle.get_label()}, {fitted}")
+    points = {sweep.integrator: sweep.points for sweep in sweeps(fixed, "kh", "reference_error")}
+    for order, kh, error in reference_slopes(fixed, points):
+        (line,) = axes.plot(kh, error, color="grey", linestyle=(0, (2, 2)), linewidth=1, label=f"slope {order}")
+        handles.append(line)
     set_log_scales(axes)
-    axes.set_xlabel("step size h (s)")
+    axes.set_xlabel("k·h (step in units of 1/k = √(L/g))")
     axes.set_ylabel("reference error, max |r − r_ref| / A")
     axes.grid(True, which="major", alpha=0.3)
     axes.set_title(f"{scene}: convergence of the fixed-step integrators", pad=14)
@@ -231,10 +339,33 @@ def convergence(scene_frame: pd.DataFrame, orders: dict[str, float], stem: Path)
     return save(figure, stem)
 
 
+def tolerance(scene_frame: pd.DataFrame, stem: Path) -> Path:
+    """Achieved reference error against the requested tolerance for the adaptive integrators of one scene,
+    with the line error = tolerance."""
+    scene = scene_frame["scene"].iloc[0]
+    adaptive = scene_frame[scene_frame["tol"].notna()]
+    figure = Figure(figsize=(9.5, 5.2), layout="constrained")
+    axes = figure.subplots()
+    handles = plot_sweeps(axes, adaptive, "tol", "reference_error")
+    tol = adaptive["tol"].to_numpy(float)
+    if tol.size:
+        span = np.array([tol.min(), tol.max()])
+        (line,) = axes.plot(span, span, color="grey", linestyle=(0, (2, 2)), linewidth=1, label="error = tolerance")
+        handles.append(line)
+    set_log_scales(axes)
+    axes.invert_xaxis()
+    axes.set_xlabel("requested tolerance (tighter to the right)")
+    axes.set_ylabel("reference error, max |r − r_ref| / A")
+    axes.grid(True, which="major", alpha=0.3)
+    axes.set_title(f"{scene}: achieved error against requested tolerance", pad=14)
+    figure.legend(handles=handles + outcome_legend_handles()[:2], loc="outside right upper", fontsize=9)
+    return save(figure, stem)
+
+
 # --------------------------------------------------------------------------------------------------------------
 # charts of the study tables
 # --------------------------------------------------------------------------------------------------------------
-def long_time_energy(table: pd.DataFrame, stem: Path) -> Path:
+def long_time_energy(table: pd.DataFrame) -> Figure:
     """|E − E₀|/E_swing against time on log-log axes, one run of the long-time energy study per colour: the
     largest value so far (bold) over the values themselves (faint), so that bounded, drifting and growing
     errors read apart."""
@@ -266,10 +397,10 @@ def long_time_energy(table: pd.DataFrame, stem: Path) -> Path:
     axes.set_title(f"Long-time energy: {first['config_model']} model, L = {first['config_length_m']:g} m, "
                    f"φ = {first['config_latitude_deg']:g}°, A = {first['config_amplitude_m']:g} m", pad=14)
     figure.legend(handles=handles + outcome_legend_handles()[:2], loc="outside right upper", fontsize=9)
-    return save(figure, stem)
+    return figure
 
 
-def stability(table: pd.DataFrame, stem: Path) -> Path:
+def stability(table: pd.DataFrame) -> Figure:
     """Max relative energy error over a long run against k·h, one panel per fixed-step integrator, without
     Earth's rotation (solid) and with it (dashed), with the declared limit (dashed line) and the measured one
     (triangle on the axis)."""
@@ -323,10 +454,10 @@ def stability(table: pd.DataFrame, stem: Path) -> Path:
     figure.legend(handles=handles + outcome_legend_handles()[:2], loc="outside lower center", ncols=3, fontsize=9)
     figure.suptitle(f"Stability: {int(first['config_steps'])} steps of the {first['config_model']} model at each k·h, "
                     f"L = {first['config_length_m']:g} m")
-    return save(figure, stem)
+    return figure
 
 
-def rotation_growth(table: pd.DataFrame, stem: Path) -> Path:
+def rotation_growth(table: pd.DataFrame) -> Figure:
     """Per-step growth of the one-step map with Earth's rotation against k·h for the integrators that declare a
     growth law (unstable at every h once the frame rotates), measured (markers) against the law (line)."""
     figure = Figure(figsize=(7.5, 4.8), layout="constrained")
@@ -346,10 +477,10 @@ def rotation_growth(table: pd.DataFrame, stem: Path) -> Path:
         axes.set_title(f"Growth with Earth's rotation (a/k = {rotating['rate_ratio'].iloc[0]:.3g})", pad=10)
         axes.legend(fontsize=9)
     axes.grid(True, which="major", alpha=0.3)
-    return save(figure, stem)
+    return figure
 
 
-def precession_latitude(table: pd.DataFrame, stem: Path) -> Path:
+def precession_latitude(table: pd.DataFrame) -> Figure:
     """Measured precession rate against latitude next to −Ω_E sin φ, and the residual in units of Ω_E with
     the Airy correction."""
     rows = table.sort_values("latitude_deg")
@@ -378,10 +509,10 @@ def precession_latitude(table: pd.DataFrame, stem: Path) -> Path:
     first = rows.iloc[0]
     figure.suptitle(f"Precession against latitude: {first['config_model']} model, L = {first['config_length_m']:g} m, "
                     f"A = {first['config_amplitude_m']:g} m, {first['config_duration_s'] / 3600:g} h per latitude")
-    return save(figure, stem)
+    return figure
 
 
-def release_azimuth(table: pd.DataFrame, stem: Path) -> Path:
+def release_azimuth(table: pd.DataFrame) -> Figure:
     """Precession-rate error (relative to Ω_E) against the release azimuth, one panel per latitude, one line per
     integrator (log scale)."""
     latitudes = sorted(table["latitude_deg"].unique(), reverse=True)
@@ -409,10 +540,10 @@ def release_azimuth(table: pd.DataFrame, stem: Path) -> Path:
     figure.suptitle(f"Precession error against release direction (0° = North-South swing, 90° = East-West): "
                     f"{first['config_model']} model, L = {first['config_length_m']:g} m, "
                     f"A = {first['config_amplitude_m']:g} m, kh = {first['kh']:g}, {first['config_duration_s']:g} s")
-    return save(figure, stem)
+    return figure
 
 
-def adequacy(table: pd.DataFrame, stem: Path) -> Path:
+def adequacy(table: pd.DataFrame) -> Figure:
     """Per scene, what each simpler model gets wrong against the richer one (``bench.problems.adequacy``): |precession
     rate difference| in units of Ω_E|sin φ| and trajectory gap in units of A, measured (filled) next to the
     leading-order expectation (hollow) where the physics gives one; dot plot on log axes."""
@@ -451,4 +582,4 @@ def adequacy(table: pd.DataFrame, stem: Path) -> Path:
     panels[0].set_yticks(positions, labels, fontsize=9)
     panels[0].set_ylim(len(rows) - 0.5, -0.5)
     figure.suptitle("Model adequacy: what each simpler model gets wrong, per scene")
-    return save(figure, stem)
+    return figure

@@ -4,12 +4,15 @@ One document model keeps index.html and REPORT.md identical in content. Figures 
 (``<stem>.png`` and ``<stem>.svg``); tables are embedded (HTML via pandas ``to_html``, Markdown via pandas
 ``to_markdown``, which uses ``tabulate``) and written beside it as CSV, Markdown, LaTeX and HTML files
 (``write_table_files``). Paths in blocks are relative to the document's folder, so the folder opens in a
-browser with no server.
+browser with no server. The reference notes a document cites (``docs/models/README.md "Airy precession"`` and
+the like) are copied from the installed package into its ``docs/`` folder (``copy_reference_docs``), so the
+folder reads on its own.
 """
 
 from __future__ import annotations
 
 import html
+import importlib.resources
 import math
 import re
 from dataclasses import dataclass, field
@@ -34,10 +37,14 @@ class Paragraph:
 
 @dataclass
 class Figure:
-    """An image pair ``<stem>.png`` / ``<stem>.svg`` (stem relative to the document's folder)."""
+    """An image pair ``<stem>.png`` / ``<stem>.svg`` (stem relative to the document's folder), and optionally
+    the same chart as a plotly figure (``interactive``: its JSON; ``points``: how many markers it draws), which
+    the HTML rendering shows instead of the PNG (with links to the PNG and SVG)."""
 
     stem: str
     caption: str
+    interactive: str | None = None
+    points: int = 0
 
 
 @dataclass
@@ -154,20 +161,60 @@ table.data th { background: #f0f0f0; }
 table.data td:last-child { white-space: normal; min-width: 22em; }
 .notes { font-size: 0.85em; color: #444; }
 nav ul { columns: 2; font-size: 0.92em; }
+div.chart { width: 100%; min-height: 520px; border: 1px solid #ddd; }
 """
 
 
-def render_html(title: str, blocks: list[Block]) -> str:
-    toc = "".join(f"<li><a href='#{_anchor(b.text)}'>{html.escape(b.text)}</a></li>"
-                  for b in blocks if isinstance(b, Heading) and b.level == 2)
-    parts = [f"<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
-             f"<style>{_STYLE}</style></head><body>", f"<h1>{html.escape(title)}</h1>",
-             f"<nav><ul>{toc}</ul></nav>"]
-    for block in blocks:
+def _anchors(blocks: list[Block]) -> dict[int, str]:
+    """A unique anchor per heading (index in ``blocks`` → id): headings whose text differs only in punctuation
+    (scenes ``a.b`` and ``a_b``) get ``-2``, ``-3``, … appended."""
+    anchors: dict[int, str] = {}
+    used: set[str] = set()
+    for index, block in enumerate(blocks):
         if isinstance(block, Heading):
-            parts.append(f"<h{block.level} id='{_anchor(block.text)}'>{html.escape(block.text)}</h{block.level}>")
+            anchor, count = _anchor(block.text), 1
+            while anchor in used:
+                count += 1
+                anchor = f"{_anchor(block.text)}-{count}"
+            used.add(anchor)
+            anchors[index] = anchor
+    return anchors
+
+
+def _interactive_html(block: Figure, number: int) -> str:
+    """A plotly chart: its div (``data-points``: the markers it should draw) and the script drawing it."""
+    chart_id = f"chart-{number}"
+    figure_json = block.interactive.replace("</", "<\\/")
+    return (f"<figure><div class='chart' id='{chart_id}' data-points='{block.points}'></div><script>"
+            f"(function () {{ var figure = {figure_json}; "
+            f"Plotly.newPlot('{chart_id}', figure.data, figure.layout, {{responsive: true, displaylogo: false}})"
+            f".then(function (chart) {{ chart.on('plotly_legendclick', function (event) "
+            f"{{ return foucaultLegendClick(chart, event); }}); }}); }})();</script>"
+            f"<figcaption>{_inline_html(block.caption)} (static: <a href='{block.stem}.png'>PNG</a>, "
+            f"<a href='{block.stem}.svg'>SVG</a>)</figcaption></figure>")
+
+
+def render_html(title: str, blocks: list[Block]) -> str:
+    anchors = _anchors(blocks)
+    toc = "".join(f"<li><a href='#{anchors[i]}'>{html.escape(b.text)}</a></li>"
+                  for i, b in enumerate(blocks) if isinstance(b, Heading) and b.level == 2)
+    head = ""
+    if any(isinstance(block, Figure) and block.interactive for block in blocks):
+        from foucault_bench.reports.interactive import LEGEND_SCRIPT, PLOTLY_JS
+
+        head = f"<script src='{PLOTLY_JS}' charset='utf-8'></script><script>{LEGEND_SCRIPT}</script>"
+    parts = [f"<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+             f"<style>{_STYLE}</style>{head}</head><body>", f"<h1>{html.escape(title)}</h1>",
+             f"<nav><ul>{toc}</ul></nav>"]
+    charts = 0
+    for index, block in enumerate(blocks):
+        if isinstance(block, Heading):
+            parts.append(f"<h{block.level} id='{anchors[index]}'>{html.escape(block.text)}</h{block.level}>")
         elif isinstance(block, Paragraph):
             parts.append(f"<p>{_inline_html(block.text)}</p>")
+        elif isinstance(block, Figure) and block.interactive:
+            charts += 1
+            parts.append(_interactive_html(block, charts))
         elif isinstance(block, Figure):
             parts.append(f"<figure><a href='{block.stem}.svg'><img src='{block.stem}.png' "
                          f"alt='{html.escape(block.caption)}'></a><figcaption>{_inline_html(block.caption)} "
@@ -188,8 +235,33 @@ def write_document(folder: Path, title: str, blocks: list[Block], html_name: str
                    markdown_name: str = "REPORT.md") -> tuple[Path, Path]:
     """Write the HTML and Markdown renderings of ``blocks`` into ``folder``; return their paths."""
     folder.mkdir(parents=True, exist_ok=True)
+    copy_reference_docs(folder)
     html_path = folder / html_name
     markdown_path = folder / markdown_name
     html_path.write_text(render_html(title, blocks), encoding="utf-8")
+    if any(isinstance(block, Figure) and block.interactive for block in blocks):
+        from plotly.offline import get_plotlyjs
+
+        from foucault_bench.reports.interactive import PLOTLY_JS
+
+        (folder / PLOTLY_JS).write_text(get_plotlyjs(), encoding="utf-8")
     markdown_path.write_text(render_markdown(title, blocks), encoding="utf-8")
     return html_path, markdown_path
+
+
+REFERENCE_DOCS = ("models", "integrators", "bench", "reports")
+"""Sub-packages whose README.md (package data) generated documents may cite, as ``docs/<package>/README.md``."""
+DOCS_FOLDER = "docs"
+
+
+def copy_reference_docs(folder: Path) -> list[Path]:
+    """Copy each ``foucault_bench.<package>/README.md`` of ``REFERENCE_DOCS`` to ``folder/docs/<package>/README.md``
+    (the layout of the repository, so the notes' links to each other keep working); return the paths written."""
+    written = []
+    for package in REFERENCE_DOCS:
+        source = importlib.resources.files(f"foucault_bench.{package}").joinpath("README.md")
+        target = folder / DOCS_FOLDER / package / "README.md"
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(source.read_text(encoding="utf-8"), encoding="utf-8")
+        written.append(target)
+    return written

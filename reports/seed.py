@@ -2,12 +2,13 @@
 
     foucault-bench seed [--out DIR]
 
-The seed note (shared/seed, Spanish) shows four figures: the first 2 minutes of its approximate analytic
-solution (eqs. 14-15, ω = 2π/24 h), its Euler solution of eqs. 4-5, that solution's relative energy error, and
-the numeric-minus-analytic difference. Each is redrawn here as the seed made it (with stated assumptions where the
-note gives no numbers) beside a corrected figure, and followed by one paragraph saying which claim holds and
-which does not, with numbers. The computations are ``reports.studies.seed_revisited`` (the suite's integrators
-and ``models.analytic``); this module only plots and writes. ``seed_blocks`` is also the report's section.
+The seed note (Spanish; summarised in reports/README.md "The seed note") shows four figures: the first 2 minutes
+of its approximate analytic solution (eqs. 14-15, ω = 2π/24 h), its Euler solution of eqs. 4-5, that solution's
+relative energy error, and the numeric-minus-analytic difference. Each is redrawn here as the seed made it (with
+stated assumptions where the note gives no numbers) beside a corrected figure, and followed by one paragraph
+saying which claim holds and which does not, with numbers. The computations are ``reports.studies.seed_revisited``
+(the suite's integrators and ``models.analytic``); this module only plots and writes. ``seed_blocks`` is also the
+report's section.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from matplotlib.figure import Figure as MplFigure
 from foucault_bench.bench.errors import InputError
 from foucault_bench.reports.studies import SeedStudy, seed_revisited
 from foucault_bench.reports.charts import integrator_style, save
+from foucault_bench.reports.interactive import drawn_points, from_matplotlib
 from foucault_bench.reports.document import Block, Figure, Heading, Paragraph, write_document
 
 GREY = "#7f7f7f"
@@ -31,7 +33,7 @@ def _seed_colour() -> str:
     return integrator_style("explicit_euler", "euler")["color"]
 
 
-def _trajectory(study: SeedStudy, stem: Path) -> Path:
+def _trajectory(study: SeedStudy) -> MplFigure:
     s = study.series
     figure = MplFigure(figsize=(15, 4.6), layout="constrained")
     seed_axes, corrected_axes, gap_axes = figure.subplots(1, 3)
@@ -59,10 +61,10 @@ def _trajectory(study: SeedStudy, stem: Path) -> Path:
     gap_axes.set_title("What the approximation and the 24 h day miss")
     gap_axes.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncols=1)
     gap_axes.grid(True, alpha=0.3)
-    return save(figure, stem)
+    return figure
 
 
-def _euler(study: SeedStudy, stem: Path) -> Path:
+def _euler(study: SeedStudy) -> MplFigure:
     s = study.series
     figure = MplFigure(figsize=(15, 4.6), layout="constrained")
     seed_axes, corrected_axes, amplitude_axes = figure.subplots(1, 3)
@@ -89,7 +91,7 @@ def _euler(study: SeedStudy, stem: Path) -> Path:
     amplitude_axes.set_title("The swing widens under explicit Euler")
     amplitude_axes.legend(fontsize=8, loc="upper left")
     amplitude_axes.grid(True, alpha=0.3)
-    return save(figure, stem)
+    return figure
 
 
 def _plot_running_max(axes, series, curves) -> None:
@@ -103,7 +105,7 @@ def _plot_running_max(axes, series, curves) -> None:
     axes.set_yscale("log")
 
 
-def _energy(study: SeedStudy, stem: Path) -> Path:
+def _energy(study: SeedStudy) -> MplFigure:
     s = study.series
     t = s["t_s"]
     figure = MplFigure(figsize=(14, 4.8), layout="constrained")
@@ -127,10 +129,10 @@ def _energy(study: SeedStudy, stem: Path) -> Path:
     for axes in (seed_axes, corrected_axes):
         axes.set_xlabel("time t (s)")
         axes.grid(True, alpha=0.3)
-    return save(figure, stem)
+    return figure
 
 
-def _difference(study: SeedStudy, stem: Path) -> Path:
+def _difference(study: SeedStudy) -> MplFigure:
     s = study.series
     t = s["t_s"]
     figure = MplFigure(figsize=(14, 4.8), layout="constrained")
@@ -154,7 +156,7 @@ def _difference(study: SeedStudy, stem: Path) -> Path:
     for axes in (seed_axes, corrected_axes):
         axes.set_xlabel("time t (s)")
         axes.grid(True, alpha=0.3)
-    return save(figure, stem)
+    return figure
 
 
 def _findings(study: SeedStudy) -> dict[str, str]:
@@ -216,7 +218,7 @@ def _findings(study: SeedStudy) -> dict[str, str]:
             f"seed's ({n['centrifugal_seed_x_m_s2']:.3g}, {n['centrifugal_seed_y_m_s2']:.3g}, 0). "
             f"**Holds:** the term is negligible, {n['centrifugal_over_gravity']:.1e} g here, as the seed says. "
             "Separately, eqs. 4-5 keep ω-terms about 100× smaller than the geometric nonlinearity of the swing "
-            "they drop (PHYSICS.md 'Models' 3): the suite's spherical model keeps both."),
+            "they drop (docs/models/README.md \"The seed's planar model\"): the suite's spherical model keeps both."),
     }
 
 
@@ -229,7 +231,8 @@ def seed_blocks(folder: Path, prefix: str) -> list[Block]:
     blocks: list[Block] = [
         Heading("The seed note revisited"),
         Paragraph(
-            "The seed note (shared/seed) solves the Foucault pendulum with an approximate analytic solution "
+            "The seed note (in Spanish; summarised in docs/reports/README.md \"The seed note\") solves the Foucault "
+            "pendulum with an approximate analytic solution "
             "(its eqs. 14-15) and explicit Euler on its eqs. 4-5. It gives ω = 2π/24 h and a 2-minute window but "
             f"no length, amplitude, latitude or step; we assume L = {c.length_m:g} m, y₀ = {c.amplitude_m:g} m, "
             f"latitude {c.latitude_deg:g}° (the seed's colatitude λ = {90 - c.latitude_deg:g}°), release from rest "
@@ -244,8 +247,11 @@ def seed_blocks(folder: Path, prefix: str) -> list[Block]:
         ("energy", _energy, "Relative energy error of the Euler solution, and of sound schemes and the model itself."),
         ("difference", _difference, "Numeric minus analytic, and what it is made of."),
     ):
-        draw(study, folder / prefix / f"seed_{name}")
-        blocks += [Figure(f"{prefix}/seed_{name}", caption), Paragraph(findings[name])]
+        figure = draw(study)
+        save(figure, folder / prefix / f"seed_{name}")
+        plot = from_matplotlib(figure)
+        blocks += [Figure(f"{prefix}/seed_{name}", caption, plot.to_json(), drawn_points(plot)),
+                   Paragraph(findings[name])]
     blocks += [Heading("The centrifugal term", level=3), Paragraph(findings["centrifugal"])]
     return blocks
 

@@ -4,15 +4,15 @@
                             [--earth-rate X] [--latitude DEG] [--length M] [--amplitude M]
                             [--save FILE.gif|FILE.mp4] [--frames N] [--fps N]
 
-The window shows the bob's path in map view (East to the right, North up: the frame is x South, y East, z Up)
-over ``--hours`` of swinging: the numeric solution of the chosen model by the chosen integrator and, overlaid,
-the exact solution of the linear model (``models.analytic.linear_exact``); the release direction and the swing
-plane's expected direction at the end, ψ₀ − ω sin φ · t (PHYSICS.md "Frames"), are drawn through the centre.
-Sliders set Earth's rate (in multiples of the sidereal Ω_E, so that the precession shows within a few
-swings), the latitude, the string length and the amplitude. The readout gives the precession rate measured on
-the numeric solution's turning points (``bench.verdicts.turning_points.turning_points_from_grid`` and ``precession_rate``,
-the procedure of the results table) against the textbook −ω sin φ, in degrees per hour, counter-clockwise
-positive.
+The window shows the bob's path in map view (East to the right, North up: the frame is x South, y East, z Up) over
+``--hours`` of swinging: the numeric solution of the chosen model by the chosen integrator and, overlaid, the
+exact solution of the linear model (``models.analytic.linear_exact``); the release direction and the swing plane's
+expected direction at the end, ψ₀ − ω sin φ · t (models/README.md "Frames and conventions"), are drawn through the
+centre. Sliders set Earth's rate (in multiples of the sidereal Ω_E, so that the precession shows within a few
+swings), the latitude, the string length and the amplitude. The readout gives the precession rate measured on the
+numeric solution's turning points (``bench.verdicts.turning_points.turning_points_from_grid`` and
+``precession_rate``, the procedure of the results table) against the textbook −ω sin φ, in degrees per hour,
+counter-clockwise positive.
 
 ``--save`` writes an animation of the same view instead (no display needed): GIF with Pillow, MP4 with ffmpeg
 (a clear error when ffmpeg is not installed). The computation (``simulate``) is separate from the drawing

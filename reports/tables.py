@@ -1,9 +1,11 @@
 """The report's tables, derived from the results rows (columns of ``bench.schema``) as plain DataFrames.
 
-* ``matched_accuracy``: one row per (scene, integrator): the cheapest setting (least median wall time) whose
-  reference error reaches ``target`` (1e-6 by default), its cost, or "not reached"; run counts by status.
-* ``shootout``: per scene, integrators ranked by efficiency = 1 / (reference error × wall time), best setting
-  of each.
+* ``matched_accuracy``: per scene and target (1e-3, 1e-6, 1e-9 or the targets given), the cheapest integrator
+  and setting whose reference error meets it, the runner-up and the cost ratio (``bench.verdicts.pareto``);
+* ``per_integrator``: one row per (scene, integrator): the cheapest setting whose reference error reaches
+  ``target`` (1e-6 by default), its cost, or "not reached"; run counts by status;
+* ``fronts`` / ``families``: the Pareto-efficient runs of every error metric, and the best run of each family;
+* ``scenes_table``: what each scene is (place, pendulum, release, grid, model and why, source).
 * ``convergence_orders``: the observed order of each fixed-step integrator per scene
   (``bench.verdicts.convergence.observed_order``) next to its declared order.
 * ``compact_table`` / ``full_table``: the tidy results, a readable subset and every column.
@@ -15,12 +17,16 @@ column's unit and meaning (from ``bench.schema`` plus the derived columns define
 
 from __future__ import annotations
 
+from typing import Sequence
+
 import numpy as np
 import pandas as pd
 
 from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS
-from foucault_bench.bench.schema import setting_label
+from foucault_bench.bench.problems.scenes import Scene
+from foucault_bench.bench.verdicts import pareto
 from foucault_bench.bench.verdicts.convergence import observed_order
+from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS, cheapest_meeting, cost_column
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
 from foucault_bench.integrators.registry import REGISTRY
 
@@ -37,9 +43,27 @@ DERIVED_NOTES: dict[str, str] = {
     "outcome": "whether any ok run reached the target reference error",
     "setting": "step as k·h (fixed-step) or tolerance (adaptive)",
     "note": "first diverged/failed message of this scene and integrator",
-    "rank": "1 = most efficient in the scene",
-    "efficiency_per_s": "1/s; 1 / (reference_error × wall_time_s), best setting",
+    "metric": "error column the row is about (bench.verdicts.pareto.ERROR_METRICS)",
+    "target": "largest error accepted",
+    "error": "|metric| of the run",
+    "runner_up": "cheapest integrator other than the winner meeting the target",
+    "runner_up_setting": "its setting",
+    "runner_up_error": "its error",
+    "ratio": "runner-up cost / winner cost (≥ 1: how much the winner saves)",
+    "best_error": "smallest error any ok run reached (when the target is not reached)",
+    "front_points": "runs of the family on the scene's Pareto front",
+    "runner_up_cpu_time_s": "s; runner-up's CPU time",
+    "runner_up_wall_time_s": "s; runner-up's median wall time",
     "declared_order": "classical order the integrator declares (empty: varies)",
+    "place": "where the pendulum is (or what the scene is for)",
+    "length_m": "m; string length L",
+    "latitude_deg": "°; geographic latitude φ, north positive",
+    "amplitude_m": "m; horizontal distance A of the release point from the vertical",
+    "release_azimuth_deg": "°; direction of the release point from x (South) towards y (East)",
+    "release": "initial velocity in the rotating frame",
+    "output_interval_s": "s; spacing of the output grid shared by every integrator",
+    "why_model": "why the scene's model is enough (bench.problems.adequacy measures the others)",
+    "source": "where the scene's numbers come from",
     "kind": "fixed-step (fitted) or adaptive (no step size to fit against)",
     "fitted_order": "slope of log(reference_error) against log(step_s) over the ok runs",
     "points": "ok runs with a finite positive reference error used in the fit",
@@ -95,54 +119,47 @@ def _groups(frame: pd.DataFrame):
     return frame.groupby(["scene", "integrator"], sort=True)
 
 
-def _setting(row: pd.Series) -> str:
-    return setting_label(row["kh"], row["tol"])
-
-
-def matched_accuracy(frame: pd.DataFrame, target: float = MATCHED_ACCURACY_TARGET) -> pd.DataFrame:
-    """One row per (scene, integrator): the cheapest setting with reference_error ≤ ``target`` and its cost."""
+def per_integrator(frame: pd.DataFrame, target: float = MATCHED_ACCURACY_TARGET) -> pd.DataFrame:
+    """One row per (scene, integrator): the cheapest setting (``pareto.cost_column``) with reference_error ≤
+    ``target``, its cost, or why none reached it; the run counts by status."""
+    cost = cost_column(frame)
     rows = []
     for (scene, integrator), group in _groups(frame):
         ok = group[group["status"] == STATUS_OK]
-        reached = ok[ok["reference_error"] <= target]
+        met = cheapest_meeting(group, "reference_error", target)
         row = {"scene": scene, "integrator": integrator, "family": group["family"].iloc[0]}
-        if not reached.empty:
-            best = reached.loc[reached["wall_time_s"].fillna(np.inf).idxmin()]
-            row.update(outcome="reached", setting=_setting(best), reference_error=best["reference_error"],
-                       wall_time_s=best["wall_time_s"], nfev=best["nfev"])
+        if not met.empty:
+            best = met.iloc[0]
+            at = ok[ok["reference_error"].abs() == best["error"]].iloc[0]
+            row.update(outcome="reached", setting=best["setting"], reference_error=best["error"],
+                       **{cost: best[cost]}, nfev=at["nfev"])
         else:
             outcome = "not reached" if not ok.empty else f"no ok run ({', '.join(sorted(set(group['status'])))})"
-            row.update(outcome=outcome, setting="", reference_error=ok["reference_error"].min(),
-                       wall_time_s=np.nan, nfev=np.nan)
+            row.update(outcome=outcome, setting="", reference_error=ok["reference_error"].abs().min(),
+                       **{cost: np.nan}, nfev=np.nan)
         row.update(_status_counts(group))
         rows.append(row)
-    columns = ["scene", "integrator", "family", "outcome", "setting", "reference_error", "wall_time_s", "nfev",
+    columns = ["scene", "integrator", "family", "outcome", "setting", "reference_error", cost, "nfev",
                "runs", "ok", "diverged", "failed", "note"]
     return pd.DataFrame(rows, columns=columns)
 
 
-def shootout(frame: pd.DataFrame) -> pd.DataFrame:
-    """Per scene, integrators ranked by their best efficiency 1 / (reference_error × wall_time_s)."""
-    rows = []
-    for (scene, integrator), group in _groups(frame):
-        ok = group[group["status"] == STATUS_OK]
-        efficiency = 1.0 / (ok["reference_error"] * ok["wall_time_s"])
-        efficiency = efficiency[np.isfinite(efficiency) & (efficiency > 0)]
-        row = {"scene": scene, "integrator": integrator, "family": group["family"].iloc[0]}
-        if efficiency.empty:
-            row.update(setting="", reference_error=np.nan, wall_time_s=np.nan, efficiency_per_s=np.nan)
-        else:
-            best = ok.loc[efficiency.idxmax()]
-            row.update(setting=_setting(best), reference_error=best["reference_error"],
-                       wall_time_s=best["wall_time_s"], efficiency_per_s=efficiency.max())
-        row.update(_status_counts(group))
-        rows.append(row)
-    table = pd.DataFrame(rows)
-    table["rank"] = table.groupby("scene")["efficiency_per_s"].rank(ascending=False, method="min")
-    table = table.sort_values(["scene", "rank", "integrator"], na_position="last")
-    columns = ["scene", "rank", "integrator", "family", "setting", "reference_error", "wall_time_s",
-               "efficiency_per_s", "runs", "ok", "diverged", "failed", "note"]
-    return table[columns].reset_index(drop=True)
+def matched_accuracy(frame: pd.DataFrame, targets: Sequence[float] = DEFAULT_TARGETS,
+                     metric: str = "reference_error") -> pd.DataFrame:
+    """Per scene and target: the cheapest integrator and setting meeting it, the runner-up (cheapest run of
+    another integrator) and the cost ratio (``bench.verdicts.pareto.matched_accuracy``)."""
+    return pareto.matched_accuracy(frame, metric, targets)
+
+
+def fronts(frame: pd.DataFrame) -> pd.DataFrame:
+    """The Pareto-efficient runs of every error metric with values, per scene, cheapest first."""
+    return pareto.all_fronts(frame)
+
+
+def families(frame: pd.DataFrame) -> pd.DataFrame:
+    """Per scene, metric and family: the family's most accurate run and its share of the front."""
+    parts = [pareto.best_of_family(frame, metric) for metric in pareto.metrics_present(frame)]
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
 
 
 def convergence_orders(frame: pd.DataFrame) -> pd.DataFrame:
@@ -170,6 +187,29 @@ def orders_by_integrator(orders: pd.DataFrame, scene: str) -> dict[str, float]:
     """integrator → fitted order (float) for one scene, from ``convergence_orders``."""
     rows = orders[orders["scene"] == scene]
     return {row.integrator: float(row.fitted_order) for row in rows.itertuples() if row.kind == "fixed-step"}
+
+
+def scenes_table(scenes: Sequence[Scene], names: Sequence[str] = ()) -> pd.DataFrame:
+    """One row per scene: place, pendulum, release, duration and output grid, model and why, source. Names in
+    ``names`` without a ``Scene`` (an inline scene of a matrix file the report cannot see) get a row saying so."""
+    rows = []
+    for scene in scenes:
+        params = scene.params
+        moving = params.release_velocity_m_s != (0.0, 0.0)
+        rows.append({
+            "scene": scene.name, "place": scene.title, "length_m": params.length_m,
+            "latitude_deg": params.latitude_deg, "amplitude_m": params.amplitude_m,
+            "release_azimuth_deg": params.release_azimuth_deg,
+            "release": f"moving at {params.release_velocity_m_s} m/s" if moving else "from rest",
+            "duration_s": scene.duration_s, "output_interval_s": scene.output_interval_s, "model": scene.model,
+            "why_model": scene.why_model, "source": scene.source,
+        })
+    known = {scene.name for scene in scenes}
+    rows += [{"scene": name, "place": "inline scene of a matrix file (its parameters are in that file)"}
+             for name in names if name not in known]
+    return pd.DataFrame(rows, columns=["scene", "place", "length_m", "latitude_deg", "amplitude_m",
+                                       "release_azimuth_deg", "release", "duration_s", "output_interval_s",
+                                       "model", "why_model", "source"])
 
 
 def _sorted_rows(frame: pd.DataFrame) -> pd.DataFrame:

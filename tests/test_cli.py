@@ -60,3 +60,10 @@ def test_an_option_without_its_extra_is_one_line_naming_the_extra(argv, module, 
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"pip install 'foucault-bench[{extra}]'" in err[0], err
     assert not (tmp_path / "results").exists()  # refused before anything was written
+
+
+def test_the_report_command_and_the_report_share_their_default_targets():
+    from foucault_bench.bench.commands.report import DEFAULT_TARGETS as command_targets
+    from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS as report_targets
+
+    assert command_targets == report_targets

@@ -13,6 +13,7 @@ import pandas as pd
 import pytest
 
 from foucault_bench.bench.schema import COLUMN_NAMES
+from foucault_bench.bench.verdicts.pareto import pareto_front
 from foucault_bench.reports.studies import (
     LongTimeEnergyConfig,
     PrecessionLatitudeConfig,
@@ -110,7 +111,8 @@ def test_report_writes_every_file_it_links(report: Path) -> None:
     markdown = (report / "REPORT.md").read_text(encoding="utf-8")
     html_links = set(re.findall(r"(?:src|href)='([^'#]+)'", html))
     markdown_links = set(re.findall(r"\]\(([^)]+)\)", markdown))
-    assert html_links == markdown_links  # same content in both renderings
+    assert html_links == markdown_links | {"plotly.min.js"}  # same content in both renderings
+    assert "cdn" not in html.lower() and "https://" not in html  # opens offline
     for link in html_links:
         assert (report / link).is_file(), link
     figures = {link for link in html_links if link.endswith(".png")}
@@ -121,16 +123,17 @@ def test_report_writes_every_file_it_links(report: Path) -> None:
                          "analytic_gap_exact")}
     expected_figures |= {f"figures/work_precision_pantheon_{verdict}.png"
                          for verdict in ("reference_error", "energy_max_rel_error")}
-    expected_figures |= {f"figures/convergence_{scene}.png" for scene in SCENES}
+    expected_figures |= {f"figures/{kind}_{scene}.png" for scene in SCENES for kind in ("convergence", "tolerance")}
     expected_figures |= {"figures/study_long_time_energy.png", "figures/study_stability.png",
                          "figures/study_precession_latitude.png", "figures/model_adequacy.png"}
     assert expected_figures <= figures
     assert not any("work_precision_pantheon_analytic" in figure for figure in figures)
     assert "pantheon: no analytic gap values" in html
-    for stem in ("matched_accuracy", "shootout", "convergence_orders", "runs_compact", "runs_full", "model_adequacy"):
+    for stem in ("matched_accuracy", "per_integrator", "pareto_fronts", "best_of_family", "scenes",
+                 "convergence_orders", "runs_compact", "runs_full", "model_adequacy"):
         for suffix in ("csv", "md", "tex", "html"):
             assert (report / "tables" / f"{stem}.{suffix}").stat().st_size > 0, (stem, suffix)
-    assert "\\begin{tabular}" in (report / "tables" / "shootout.tex").read_text(encoding="utf-8")
+    assert "\\begin{tabular}" in (report / "tables" / "per_integrator.tex").read_text(encoding="utf-8")
 
 
 def test_png_figures_are_real_images(report: Path) -> None:
@@ -144,7 +147,7 @@ def test_png_figures_are_real_images(report: Path) -> None:
 def test_every_table_has_a_row_per_integrator_and_scene() -> None:
     runs = results_fixture()
     present = set(zip(runs["scene"], runs["integrator"]))
-    for table in (tables.matched_accuracy(runs), tables.shootout(runs), tables.convergence_orders(runs)):
+    for table in (tables.per_integrator(runs), tables.convergence_orders(runs)):
         assert set(zip(table["scene"], table["integrator"])) == present
         assert len(table) == len(present)
     assert len(tables.compact_table(runs)) == len(tables.full_table(runs)) == len(runs)
@@ -153,7 +156,7 @@ def test_every_table_has_a_row_per_integrator_and_scene() -> None:
 
 def test_failed_and_diverged_runs_appear_with_their_status(report: Path) -> None:
     runs = results_fixture()
-    summary = tables.matched_accuracy(runs).set_index(["scene", "integrator"])
+    summary = tables.per_integrator(runs).set_index(["scene", "integrator"])
     only_failed = summary.loc[("lab", "scipy_lsoda")]
     assert only_failed["outcome"] == "no ok run (failed)"
     assert (only_failed["failed"], only_failed["ok"]) == (1, 0)
@@ -161,9 +164,6 @@ def test_failed_and_diverged_runs_appear_with_their_status(report: Path) -> None
     assert summary.loc[("lab", "cvode_adams"), "failed"] == 1
     assert summary.loc[("lab", "explicit_euler"), "diverged"] == 1
     assert summary.loc[("lab", "explicit_euler"), "note"] == DIVERGED_MESSAGE
-    shootout = tables.shootout(runs)
-    lsoda = shootout[(shootout["scene"] == "lab") & (shootout["integrator"] == "scipy_lsoda")].iloc[0]
-    assert math.isnan(lsoda["rank"]) and lsoda["failed"] == 1
     compact = pd.read_csv(report / "tables" / "runs_compact.csv")
     failed = compact[compact["integrator"] == "scipy_lsoda"]
     assert set(failed["status"]) == {"failed"} and set(failed["message"]) == {FAILED_MESSAGE}
@@ -174,7 +174,7 @@ def test_failed_and_diverged_runs_appear_with_their_status(report: Path) -> None
 
 def test_matched_accuracy_takes_the_cheapest_setting_that_reaches_the_target() -> None:
     runs = results_fixture()
-    summary = tables.matched_accuracy(runs, target=1e-6).set_index(["scene", "integrator"])
+    summary = tables.per_integrator(runs, target=1e-6).set_index(["scene", "integrator"])
     # rk4: error 1e-2·(kh/2)⁴ ≤ 1e-6 for kh ≤ 0.2 (6.25e-7·... ) and wall time 1e-3/kh: the largest such kh wins
     rk4_ok = runs[(runs["integrator"] == "rk4") & (runs["scene"] == "lab") & (runs["reference_error"] <= 1e-6)]
     cheapest = rk4_ok.loc[rk4_ok["wall_time_s"].idxmin()]
@@ -186,16 +186,22 @@ def test_matched_accuracy_takes_the_cheapest_setting_that_reaches_the_target() -
     assert summary.loc[("lab", "explicit_euler"), "reference_error"] == pytest.approx(1e-2 * 0.025)
 
 
-def test_shootout_ranks_by_best_efficiency() -> None:
+def test_matched_accuracy_summary_names_winner_runner_up_and_ratio(report: Path) -> None:
     runs = results_fixture()
-    shootout = tables.shootout(runs)
-    lab = shootout[shootout["scene"] == "lab"]
-    ok = runs[(runs["scene"] == "lab") & (runs["status"] == "ok")]
-    best = (1.0 / (ok["reference_error"] * ok["wall_time_s"])).groupby(ok["integrator"]).max()
-    assert list(lab.dropna(subset=["rank"])["integrator"]) == list(best.sort_values(ascending=False).index)
-    for row in lab.dropna(subset=["rank"]).itertuples():
-        assert row.efficiency_per_s == pytest.approx(best[row.integrator], rel=1e-12)
-    assert lab["rank"].iloc[0] == 1
+    summary = tables.matched_accuracy(runs, (1e-3, 1e-6, 1e-9)).set_index(["scene", "target"])
+    lab = runs[(runs["scene"] == "lab") & (runs["status"] == "ok")]
+    for target in (1e-3, 1e-6, 1e-9):
+        met = lab[lab["reference_error"] <= target].sort_values("wall_time_s")
+        row = summary.loc[("lab", target)]
+        assert (row["integrator"], row["wall_time_s"]) == (met["integrator"].iloc[0], met["wall_time_s"].iloc[0])
+        others = met[met["integrator"] != row["integrator"]]
+        if others.empty:
+            assert pd.isna(row["runner_up"]) and pd.isna(row["ratio"])
+            continue
+        assert row["runner_up"] == others["integrator"].iloc[0]
+        assert row["ratio"] == pytest.approx(others["wall_time_s"].iloc[0] / met["wall_time_s"].iloc[0])
+    shown = pd.read_csv(report / "tables" / "matched_accuracy.csv")
+    assert set(shown["target"]) == {1e-3, 1e-6, 1e-9}
 
 
 def test_fitted_orders_recover_the_fixture_orders() -> None:
@@ -256,7 +262,8 @@ def test_a_scene_where_every_run_failed_still_draws_and_tabulates(tmp_path: Path
 
     runs = results_fixture()
     failed = runs[(runs["scene"] == "lab") & (runs["integrator"] == "scipy_lsoda")]
-    stem = charts.work_precision(failed, "reference_error", tmp_path / "all_failed")
+    stem = charts.work_precision(failed, "reference_error", pareto_front(failed), tmp_path / "all_failed")
     assert stem.with_suffix(".png").stat().st_size > 0 and stem.with_suffix(".svg").stat().st_size > 0
-    summary = tables.matched_accuracy(failed)
+    summary = tables.per_integrator(failed)
     assert list(summary["outcome"]) == ["no ok run (failed)"] and list(summary["failed"]) == [1]
+    assert list(tables.matched_accuracy(failed)["outcome"]) == ["not reached"] * 3

@@ -14,6 +14,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "check": ("check", "check stored or fresh results against a thresholds file (CI gate)"),
     "selftest": ("selftest", "check an integrator (built-in or plug-in) against its declared facts"),
     "perf": ("perf", "measure the suite's own speed against C loops and bare libraries"),
+    "advise": ("advise", "the cheapest integrator and setting for a scene and a target error"),
     "report": ("report", "build the HTML/Markdown report from a results database"),
     "seed": ("seed", "reproduce and correct the seed note's figures"),
     "simulate": ("simulate", "interactive simulation (or --save an animation)"),

@@ -1,9 +1,9 @@
 """Reference solutions: each scene integrated once in quadruple precision and kept in a disk cache.
 
 The reference is heyoka's Taylor integrator in IEEE binary128 (``heyoka_taylor_quad`` at
-``integrators.heyoka_taylor.REFERENCE_TOLERANCE`` = 1e-33; PHYSICS.md "Integrators": "an independent reference
-far below any double-precision error"), run on the scene's own output grid, so every integrator of the scene is
-compared with it point for point. Its state is rounded to float64 once, at the output.
+``integrators.heyoka_taylor.REFERENCE_TOLERANCE`` = 1e-33; integrators/README.md "Adaptive methods": an
+independent reference far below any double-precision error), run on the scene's own output grid, so every
+integrator of the scene is compared with it point for point. Its state is rounded to float64 once, at the output.
 
 **Cache.** One ``.npz`` file per reference under ``$FOUCAULT_BENCH_CACHE/references`` (default
 ``~/.cache/foucault-bench/references``), named by a SHA-256 of the scene's physics (model, parameters, duration,

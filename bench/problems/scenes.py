@@ -1,19 +1,19 @@
 """Scenes: a pendulum at a place, a model, a duration and one output grid shared by every integrator.
 
 A scene fixes everything about a benchmark run except the integrator and its setting. Built-in scenes are the
-real pendulums of PHYSICS.md ("Real pendulums") plus an Airy scene and the seed note's own setting; a matrix
+real pendulums of models/README.md "Real pendulums" plus an Airy scene and the seed note's own setting; a matrix
 file may define more inline (``[scene.NAME]`` tables, read by ``scene_from_mapping``), optionally starting from
 a built-in one (``base = "pantheon"``).
 
 How the built-in scenes were chosen:
 
-* **Model.** The simplest model of the hierarchy (PHYSICS.md "Models": linear < seed's planar < spherical)
-  that resolves the precession rate to the precision its source quotes it. The linear model neglects the Airy
-  precession (3/8)θ₀² (θ₀ = A/L), the release-side term ≈ ¼θ₀³cot φ and the centrifugal anisotropy; a scene
-  is linear when these stay well below the rounding of the quoted rate, spherical otherwise. Each scene's
+* **Model.** The simplest model of the hierarchy (models/README.md "The three models": linear < seed's planar
+  < spherical) that resolves the precession rate to the precision its source quotes it. The linear model neglects
+  the Airy precession (3/8)θ₀² (θ₀ = A/L), the release-side term ≈ ¼θ₀³cot φ and the centrifugal anisotropy; a
+  scene is linear when these stay well below the rounding of the quoted rate, spherical otherwise. Each scene's
   ``why_model`` gives its numbers; ``bench.problems.adequacy`` measures what the other models would change.
-* **Amplitude.** Not well sourced for any real pendulum (PHYSICS.md): each scene states the amplitude it
-  assumes, a swing of θ₀ ≈ 0.045-0.05 rad unless the scene is about large swings.
+* **Amplitude.** Not well sourced for any real pendulum (models/README.md "Real pendulums"): each scene states
+  the amplitude it assumes, a swing of θ₀ ≈ 0.045-0.05 rad unless the scene is about large swings.
 * **Duration.** Cost grows with the number of swings, so each real scene lasts 200-520 small-swing periods
   (30 min to 1 h), enough for the swing plane to turn 5-15°; the default matrix (every integrator family
   over a work-precision sweep of every real scene) then stays within minutes on 2 cores, and the real128
@@ -313,7 +313,7 @@ def _builtin_scenes() -> dict[str, Scene]:
             duration_s=3600.0,
             output_interval_s=2.0,
             why_model=_linear_why(3.0 / 67.0, "11.3°/h clockwise", 0.05 / 11.3, 48.846),
-            source="PHYSICS.md 'Real pendulums': Foucault's Panthéon pendulum, 1851 (C. R. Acad. Sci. 32, 135): "
+            source="Foucault, C. R. Acad. Sci. Paris 32, 135 (1851); Aczel, Pendulum (2003): the Panthéon pendulum: "
                    "L = 67 m, 28 kg bob, period 16.4 s, 11.3°/h clockwise.",
             assumptions="amplitude 3 m (the figure commonly given); released from rest towards the East; "
                         "1 h (219 periods, the plane turns 11.3°); output every 2 s (≈ period/8.2).",
@@ -326,7 +326,8 @@ def _builtin_scenes() -> dict[str, Scene]:
             duration_s=3600.0,
             output_interval_s=1.25,
             why_model=_linear_why(1.0 / 22.9, "9.8°/h clockwise", 0.05 / 9.8, 40.749),
-            source="PHYSICS.md 'Real pendulums': UN headquarters, New York: L = 22.9 m, 91 kg bob, period 9.6 s, "
+            source="United Nations gift record UNNY134G (Foucault Pendulum, 1955): wire 75 ft = 22.9 m, "
+                   "200 lb = 91 kg bob; period 9.6 s, "
                    "9.8°/h clockwise.",
             assumptions="amplitude 1 m (θ₀ ≈ 0.044, not sourced); released from rest towards the East; 1 h "
                         "(375 periods); output every 1.25 s (≈ period/7.7).",
@@ -339,7 +340,7 @@ def _builtin_scenes() -> dict[str, Scene]:
             duration_s=1800.0,
             output_interval_s=0.9,
             why_model=_linear_why(0.6 / 12.2, "8.4°/h clockwise", 0.05 / 8.4, 34.118),
-            source="PHYSICS.md 'Real pendulums': Griffith Observatory, Los Angeles: L = 12.2 m, 109 kg bob, "
+            source="Griffith Observatory exhibit description: cable 40 ft = 12.2 m, 240 lb = 109 kg bob; "
                    "period 7.0 s, 8.4°/h clockwise.",
             assumptions="amplitude 0.6 m (θ₀ ≈ 0.049, not sourced); released from rest towards the East; "
                         "30 min (257 periods, the plane turns 4.2°); output every 0.9 s (≈ period/7.8).",
@@ -353,7 +354,8 @@ def _builtin_scenes() -> dict[str, Scene]:
             output_interval_s=1.5,
             why_model=_spherical_why(1.5 / 33.0, "15.04°/h counter-clockwise", 0.005 / 15.04)
             + " At the pole ω is vertical: no release-side term, the Airy correction appears alone.",
-            source="PHYSICS.md 'Real pendulums': Amundsen-Scott South Pole station (2001): L = 33 m, 25 kg bob, "
+            source="Baker, Seven Tales of the Pendulum (OUP 2011), Tale 1: Amundsen-Scott South Pole station "
+                   "(2001): L = 33 m, 25 kg bob, "
                    "period 11.5 s, 15.04°/h counter-clockwise.",
             assumptions="amplitude 1.5 m (θ₀ ≈ 0.045, not sourced); released from rest along azimuth 90°; "
                         "1 h (313 periods, the plane turns 15°); output every 1.5 s (≈ period/7.7).",
@@ -366,7 +368,7 @@ def _builtin_scenes() -> dict[str, Scene]:
             duration_s=1800.0,
             output_interval_s=0.45,
             why_model=_spherical_why(0.15 / 3.0, "9.76°/h clockwise", 0.005 / 9.76),
-            source="arXiv:0902.1829 via PHYSICS.md 'Real pendulums': L = 3 m, period 3.47 s, latitude 40.44° N, "
+            source="Schumacher & Tarbet, arXiv:0902.1829 (2009): L = 3 m, period 3.47 s, latitude 40.44° N, "
                    "9.76°/h clockwise.",
             assumptions="amplitude 0.15 m (θ₀ = 0.05, not sourced); released from rest towards the East; 30 min "
                         "(518 periods, the plane turns 4.9°); output every 0.45 s (≈ period/7.7).",
@@ -382,7 +384,8 @@ def _builtin_scenes() -> dict[str, Scene]:
                       "of the Coriolis-made ellipse, −Ω_E sin φ·(1 − (3/8)θ₀²), 3.4 % slower at θ₀ = 0.3 "
                       "(Airy 1851; Olsson, Am. J. Phys. 49, 531, 1981). Only the spherical model has it: both "
                       "planar models lack the geometric nonlinearity that makes it.",
-            source="PHYSICS.md 'Airy precession'; pendulum of arXiv:0902.1829 (L = 3 m, 40.44° N).",
+            source="Airy, Mem. R. Astron. Soc. 20, 121 (1851); pendulum of Schumacher & Tarbet, arXiv:0902.1829 "
+                   "(L = 3 m, 40.44° N).",
             assumptions="amplitude 0.9 m (θ₀ = 0.3, a deliberately large swing); released from rest towards the "
                         "East, where the release-side term (∝ cos of the release azimuth from South) vanishes; "
                         "30 min (≈ 516 periods); output every 0.45 s.",

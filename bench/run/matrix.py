@@ -1,6 +1,6 @@
 """Benchmark matrices: which scenes, which integrators, which step sizes and tolerances (a TOML file).
 
-A matrix file (read with ``tomllib``) looks like this (README "Benchmark matrices" has the full reference)::
+A matrix file (read with ``tomllib``) looks like this (bench/README.md "Benchmark matrices" has the full reference)::
 
     name = "example"
     description = "what this matrix is for"
@@ -22,9 +22,9 @@ A matrix file (read with ``tomllib``) looks like this (README "Benchmark matrice
     [timing]                              # the timing protocol (bench.run.timing.TimingPolicy)
     min_repeats = 3
 
-Step sizes are given as kh = k·h (k = √(g/L)), the quantity the stability limits and error constants are
-written in (PHYSICS.md "Integrators"): the step in seconds is h = kh / k, and the fixed-step loop shortens it
-(never lengthens it) to fit a whole number of steps in each output interval (``integrators.fixed_step``).
+Step sizes are given as kh = k·h (k = √(g/L)), the quantity the stability limits and error constants are written
+in (integrators/README.md "Step sizes in kh"): the step in seconds is h = kh / k, and the fixed-step loop shortens
+it (never lengthens it) to fit a whole number of steps in each output interval (``integrators.fixed_step``).
 
 ``load_matrix`` refuses a bad file before anything runs and reports every problem at once
 (``bench.errors.InputError``), with a suggestion for misspelt names.
