@@ -1,4 +1,4 @@
-"""Errors the command line reports without a traceback (exit status 2)."""
+"""Errors the command line reports without a traceback (exit status 2), and the check for optional extras."""
 
 from __future__ import annotations
 
@@ -17,3 +17,10 @@ class RunInterrupted(Exception):
     sysexits.h: a temporary failure, try again)."""
 
     exit_status = 75
+def require_extra(module: str, extra: str, feature: str) -> None:
+    """Raise ``InputError`` naming the package extra that provides ``module`` when it is not installed, e.g.
+    ``--scheduler needs the 'dask' extra: pip install 'foucault-bench[dask]'``."""
+    import importlib.util
+
+    if importlib.util.find_spec(module) is None:
+        raise InputError(f"{feature} needs the {extra!r} extra: pip install 'foucault-bench[{extra}]'")

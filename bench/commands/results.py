@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from foucault_bench.bench.commands.outputs import output_file
-from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.errors import InputError, require_extra
 from foucault_bench.bench.run.store import DEFAULT_DB
 
 
@@ -17,13 +17,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the matrix run to show or export: an id or a unique prefix (default: the latest)")
     chosen.add_argument("--all", action="store_true", help="export the rows of every matrix run")
     parser.add_argument("--csv", metavar="FILE", help="write the selected run rows to a CSV file")
-    parser.add_argument("--parquet", metavar="FILE", help="write the selected run rows to a Parquet file")
+    parser.add_argument("--parquet", metavar="FILE",
+                        help="write the selected run rows to a Parquet file (needs the 'parquet' extra)")
     parser.add_argument("--compare", nargs=2, metavar=("A", "B"),
                         help="compare two matrix runs: accuracy columns must match bit for bit (exit status 1 "
                              "if not); costs are shown as ratios B/A")
 
 
 def main(args: argparse.Namespace) -> int:
+    if args.parquet:
+        require_extra("pyarrow", "parquet", "--parquet")
     import pandas as pd
 
     from foucault_bench.bench.run.store import ResultsStore, summary_text
@@ -52,7 +55,7 @@ def main(args: argparse.Namespace) -> int:
             print(runs.to_string(index=False, na_rep="–"))
         matrix_id = store.resolve_matrix_id(args.matrix_id)
         print(f"\nmatrix run {matrix_id}:")
-        print(summary_text(store.frame(matrix_id)))
+        print(summary_text(store.records(matrix_id)))
     return 0
 
 

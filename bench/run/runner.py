@@ -25,8 +25,10 @@ Nothing is lost when one run fails (bench/README.md, "Nothing is lost"):
   ``interrupted`` and end the workers; a second signal ends everything at once. A Dask cluster that goes
   away stops the matrix the same way (``bench.errors.RunInterrupted``); ``--resume`` completes it.
 
-Longer runs are started first (adaptive before fixed-step, longer scenes and finer settings first), which
-shortens the tail.
+Start-up: the executor starts its workers at once (``bench.run.executors``), and they import the numerical
+libraries while the main process reads and validates the matrix; this module imports no numerical library at
+the top, so the main process pays only for what it uses (the matrix, the store). Longer runs are started
+first (adaptive before fixed-step, longer scenes and finer settings first), which shortens the tail.
 """
 
 from __future__ import annotations
@@ -124,6 +126,7 @@ def base_row(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
         duration_s=spec.scene.duration_s,
         message="",
     )
+    row.update(spec.declared)  # the integrator's declared facts (bench.schema.DECLARED_FACTS)
     return row
 
 
