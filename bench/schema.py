@@ -1,13 +1,24 @@
 """The results table: one row per run (scene × integrator × setting), its columns, types and units.
 
-This is the contract between the runner (which writes rows), the results store (SQLite), the reports and
-the threshold checks. Every column is documented here once; the README's column table is generated from
-``COLUMNS`` (``python -m bench.schema``). Errors are dimensionless unless a unit is given.
+This is the contract between the runner (which writes rows), the results store (SQLite), the reports and the
+threshold checks. Every column is documented here once; the column table of bench/README.md "Results table" is
+generated from ``COLUMNS`` (``python -m foucault_bench.bench.schema``; ``tests/test_docs.py`` keeps them equal).
+Errors are dimensionless unless a unit is given.
+
+Each row also carries the integrator's declared facts (``DECLARED_FACTS``: family, order, stages, adaptive,
+stability limit) as they were when the run was made, so that reading results never needs the integrator's
+code (a plug-in need not be installed to report on its runs).
+
+``SCHEMA_VERSION`` numbers this contract; the results store records it in the database and migrates or refuses
+a database written under another version (``bench.run.store``). Bump it when a column is added, removed or
+changes meaning, and say in ``MIGRATIONS`` what an older database lacks.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -26,14 +37,18 @@ COLUMNS: tuple[Column, ...] = (
     Column("model", "TEXT", "", "model name (linear, seed_planar, spherical)"),
     Column("integrator", "TEXT", "", "integrator name (registry key)"),
     Column("family", "TEXT", "", "integrator family (colours, thresholds)"),
+    Column("declared_order", "INTEGER", "", "order of accuracy the integrator declares (NULL where it varies)"),
+    Column("stages", "INTEGER", "", "declared right-hand-side evaluations per step (NULL for adaptive ones)"),
+    Column("adaptive", "INTEGER", "", "1 if the integrator is driven by a tolerance, 0 if by a step size"),
+    Column("stability_limit_kh", "REAL", "", "declared largest stable k·h on ẍ = −k²x (NULL if none)"),
     Column("step_s", "REAL", "s", "effective fixed step (NULL for adaptive runs)"),
     Column("kh", "REAL", "", "k·h, the step in units of 1/k = √(L/g) (NULL for adaptive runs)"),
     Column("tol", "REAL", "", "tolerance (NULL for fixed-step runs)"),
     Column("duration_s", "REAL", "s", "integrated time span"),
     Column("n_out", "INTEGER", "", "points on the output grid (the same for every integrator of a scene)"),
     # outcome
-    Column("status", "TEXT", "", "ok / diverged / failed"),
-    Column("message", "TEXT", "", "why a run diverged or failed (empty when ok)"),
+    Column("status", "TEXT", "", "ok / diverged / failed / timeout (see RUN_STATUSES)"),
+    Column("message", "TEXT", "", "why a run diverged, failed or timed out (empty when ok)"),
     # verdicts
     Column("energy_conserved", "INTEGER", "", "1 if the model conserves its energy (Jacobi) exactly, else 0"),
     Column("energy_max_rel_error", "REAL", "", "max over the output grid of |E − E₀|/(E₀ − E_rest), E_rest = energy of the bob at rest at the bottom"),
@@ -64,6 +79,11 @@ COLUMNS: tuple[Column, ...] = (
 )
 
 COLUMN_NAMES: tuple[str, ...] = tuple(column.name for column in COLUMNS)
+STATUS_TIMEOUT = "timeout"
+RUN_STATUSES: tuple[str, ...] = ("ok", "diverged", "failed", STATUS_TIMEOUT)
+"""Every value of the ``status`` column: ok; diverged (the state became non-finite; verdicts up to the
+divergence); failed (an error, with the reason in ``message``); timeout (stopped at the per-run time limit,
+``run_timeout_s``, given in ``message``)."""
 VERDICT_COLUMNS: tuple[str, ...] = (
     "energy_max_rel_error",
     "energy_drift_per_s",
@@ -80,11 +100,49 @@ VERDICT_COLUMNS: tuple[str, ...] = (
 )
 """Accuracy columns: deterministic, identical bit for bit for the same matrix on the same machine."""
 
+DECLARED_FACTS: dict[str, str] = {
+    "family": "family",
+    "declared_order": "order",
+    "stages": "stages",
+    "adaptive": "adaptive",
+    "stability_limit_kh": "stability_limit_kh",
+}
+"""Results column → the ``integrators.Integrator`` class attribute it stores."""
+
+SCHEMA_VERSION = 2
+"""Version of ``COLUMNS`` (stored as the database's ``PRAGMA user_version``)."""
+MIGRATIONS: dict[int, str] = {
+    1: "runs lack the declared integrator facts (declared_order, stages, adaptive, stability_limit_kh) and the "
+       "precession errors in rad/s and relative to Ω_E (precession_rate_error_rad_s, _earth, "
+       "precession_rate_ref_error_rad_s, _earth): added as NULL columns, unknown for the old rows",
+}
+"""Older schema version → what a database written under it lacks (the store adds the missing columns)."""
+
+
+def declared_facts(integrator: Any) -> dict[str, Any]:
+    """The integrator's declared facts as results-column values (``DECLARED_FACTS``; a bool as 0/1)."""
+    facts = {column: getattr(integrator, attribute, None) for column, attribute in DECLARED_FACTS.items()}
+    facts["adaptive"] = None if facts["adaptive"] is None else int(bool(facts["adaptive"]))
+    return facts
+
+
+def setting_label(kh: float | None, tol: float | None) -> str:
+    """``tol=1e-08`` for an adaptive run, ``kh=0.125`` for a fixed-step one (missing values are None or NaN)."""
+    return f"tol={tol:g}" if is_present(tol) else f"kh={kh:.4g}"
+
+
+def is_present(value: Any) -> bool:
+    """Not None, not NaN (pandas' NA reads as missing too)."""
+    try:
+        return value is not None and not math.isnan(value)
+    except TypeError:
+        return False
+
 
 def markdown_table() -> str:
-    """The column table for the README."""
+    """The column table of bench/README.md "Results table" (``|`` in a description escaped for Markdown)."""
     lines = ["| column | unit | meaning |", "|---|---|---|"]
-    lines += [f"| `{c.name}` | {c.unit or '–'} | {c.description} |" for c in COLUMNS]
+    lines += [f"| `{c.name}` | {c.unit or '–'} | {c.description.replace('|', chr(92) + '|')} |" for c in COLUMNS]
     return "\n".join(lines)
 
 

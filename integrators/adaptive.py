@@ -18,7 +18,7 @@ least ``MIN_STEP_BUDGET``), far above what any tolerance down to 1e-14 needs on 
 steps per period), so that only a runaway integration (a singularity or an impossible accuracy request) hits it.
 
 **Turning points.** The maxima of the radius are the roots of r·ṙ = xẋ + yẏ where it crosses from + to −
-(PHYSICS.md "Measuring the precession rate"), found by each library's event mechanism. A release from rest
+(integrators/README.md "Measuring the precession rate"), found by each library's event mechanism. A release from rest
 makes r·ṙ = 0 at t = 0, which heyoka and scipy report as a root and CVODE does not; ``turning_points`` drops
 every event closer to t = 0 than ``RELEASE_EVENT_WINDOW_PERIODS`` small-swing periods, so all integrators
 return the same set as the fixed-step streams (t > 0).

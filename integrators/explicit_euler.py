@@ -2,8 +2,9 @@
 
 Order 1, 1 stage. On the undamped oscillator its amplification factor is |1 + ikh| > 1 for every h > 0, so
 it is unstable at every step size: the energy grows by the factor (1 + (kh)²) per step, E_n/E_0 = (1 + (kh)²)ⁿ
-(PHYSICS.md "Integrators"; Hairer, Nørsett & Wanner, Solving ODEs I, §II.1 and §IV.2). This is the scheme
-the seed note used; its claim that the energy error stays bounded is false for it.
+(integrators/README.md "Fixed-step methods on this problem"; Hairer, Nørsett & Wanner, Solving ODEs I, §II.1;
+Hairer & Wanner, Solving ODEs II, §IV.2). This is the scheme the seed note used (reports/README.md "The seed
+note"); its claim that the energy error stays bounded is false for it.
 """
 
 from typing import Callable, ClassVar

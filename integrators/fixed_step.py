@@ -9,7 +9,7 @@ This module wraps it in one compiled loop that
 * streams the verdict ingredients when ``monitor`` is on: the max relative energy error, the least-squares
   drift slope of the relative energy error (Welford's online covariance, stable over 10⁸ samples), and
   the turning points (maxima of the radius: r·ṙ changes sign from + to −, located on the cubic Hermite
-  interpolant of the step, PHYSICS.md "Measuring the precession rate");
+  interpolant of the step; integrators/README.md "Measuring the precession rate");
 * stops at the first non-finite state or when the bob leaves a bound (diverged).
 """
 

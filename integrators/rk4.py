@@ -2,7 +2,8 @@
 
 Order 4, 4 stages. Stable on the undamped oscillator for kh ≤ 2√2 ≈ 2.828 (the imaginary-axis stability
 boundary); the energy decays by about (kh)⁶/72 per step and the precession is too slow by about (kh)⁴/24
-(PHYSICS.md "Integrators"; Hairer, Nørsett & Wanner, Solving ODEs I, §II.1 and Fig. IV.2.1).
+(integrators/README.md "Fixed-step methods on this problem"; Hairer, Nørsett & Wanner, Solving ODEs I, §II.1;
+Hairer & Wanner, Solving ODEs II, §IV.2, Fig. 2.1).
 """
 
 from typing import Callable, ClassVar

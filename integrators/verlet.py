@@ -1,4 +1,6 @@
-"""Rotating-frame Störmer–Verlet: Strang splitting of H = [½|p|² + U(r)] + [−ω·(r×p)] (PHYSICS.md option b).
+"""Rotating-frame Störmer–Verlet: Strang splitting of H = [½|p|² + U(r)] + [−ω·(r×p)].
+
+The method and its properties: integrators/README.md "Rotating-frame Verlet".
 
 With the canonical momentum p = ṙ + ω×r the rotating-frame Hamiltonian is
 H = ½|p|² − ω·(r×p) + U(r), where −∇U(r) = F(r, 0) + ω×(ω×r) (``Model.numba_kick``). One step is
@@ -16,7 +18,7 @@ one-step Jacobian and the observed order. On the isotropic linear model the two 
 precession is exact to round-off and only the swing frequency carries the Verlet error (kh)²/24.
 Stable for kh < 2 (the Verlet limit on ½|p|² + ½(k² + a²)|r|²). The naive velocity Verlet with an explicit
 Coriolis kick is not used: it is neither symplectic nor volume-preserving and opens the swing into an
-ellipse (PHYSICS.md "Verlet with a Coriolis force").
+ellipse (integrators/README.md "Rotating-frame Verlet").
 
 Uses from the model: ``numba_kick`` (the position-only force), ``coriolis_vector`` (ω_c: the vertical part
 in the planar models, the full ω on the sphere) and the geometry (sphere → RATTLE). For a model that is not

@@ -1,15 +1,15 @@
-"""Closed-form solutions of the linear planar model (PHYSICS.md "Models" 1-2), vectorised over time.
+"""Closed-form solutions of the linear planar model (models/README.md "Closed forms"), vectorised over time.
 
 Both are written for a release from rest at amplitude A along azimuth ψ₀ (from x = South towards y = East),
 in complex form z = x + iy, with k = √(g/L), a = Ω_E sin φ and Ω = √(k² + a²):
 
 * exact solution of seed eqs. (6)-(7):  z(t) = A e^{iψ₀} e^{−iat} [cos Ωt + i (a/Ω) sin Ωt].
   Derivation: z̈ + 2ia ż + k² z = 0 has the roots −ia ± iΩ (seed §3, with the seed's own algebra); the two
-  constants follow from z(0) = A e^{iψ₀}, ż(0) = 0. For ψ₀ = 90° it is PHYSICS.md's
+  constants follow from z(0) = A e^{iψ₀}, ż(0) = 0. For ψ₀ = 90° (the seed's release) it is
   z = y₀ e^{−iat}[i cos Ωt − (a/Ω) sin Ωt]. Turning points (t = nπ/Ω) lie exactly on azimuth ψ₀ − at.
 * the seed's approximate solution, eqs. (14)-(15):  z(t) = A e^{iψ₀} e^{−iat} cos kt. It drops the
   narrow ellipse (c₄ ≈ c₂ in the seed) and uses k for Ω, so its gap from the exact solution is
-  |Δz| ≈ A |sin kt| √((a/k)² + (a²t/2k)²) (PHYSICS.md "Models" 2; ``seed_gap_bound``).
+  |Δz| ≈ A |sin kt| √((a/k)² + (a²t/2k)²) (models/README.md "Closed forms"; ``seed_gap_bound``).
 """
 
 from __future__ import annotations
@@ -55,7 +55,8 @@ def seed_approximate(params: PendulumParameters, t_s: np.ndarray) -> np.ndarray:
 
 
 def seed_gap_bound(params: PendulumParameters, t_s: np.ndarray) -> np.ndarray:
-    """|z_seed − z_exact| / A to leading order in a/k: |sin kt|·√((a/k)² + (a²t/2k)²) (PHYSICS.md "Models" 2)."""
+    """|z_seed − z_exact| / A to leading order in a/k: |sin kt|·√((a/k)² + (a²t/2k)²) (models/README.md "Closed
+    forms")."""
     t = np.asarray(t_s, dtype=np.float64)
     k = params.pendulum_frequency_rad_s
     a = params.vertical_rate_rad_s

@@ -10,8 +10,8 @@ geometry: ``"plane"`` (state moves in the horizontal plane; z ignored) or ``"sph
 radius L, z = −√(L² − x² − y²) below the pivot). From that one source this module derives
 
 * the right-hand side of the first-order system in the state (x, y, ẋ, ẏ) (``acceleration``), with the
-  string's constraint force for the sphere (PHYSICS.md "Models" 4, d'Alembert's principle);
-* the split a rotating-frame Verlet needs (PHYSICS.md "Verlet with a Coriolis force", option b): the
+  string's constraint force for the sphere (models/README.md "Spherical model", d'Alembert's principle);
+* the split a rotating-frame Verlet needs (integrators/README.md "Rotating-frame Verlet"): the
   Coriolis rotation vector, the position-only kick −∇U(r) = F(r, 0) + ω×(ω×r) acting on the canonical
   momentum p = ṙ + ω×r, and, for non-Hamiltonian models only, the remaining velocity-dependent force
   G(r, ṙ) = F(r, ṙ) − F(r, 0) + 2ω×ṙ;
@@ -81,7 +81,7 @@ def plane_project(x, y, z, vx, vy, vz, fx, fy, fz, p):
 
 @jitable
 def sphere_project(x, y, z, vx, vy, vz, fx, fy, fz, p):
-    """Bob on a sphere: r̈ = F + μr with μ = −(|ṙ|² + r·F)/L² keeping |r| = L (PHYSICS.md "Models" 4)."""
+    """Bob on a sphere: r̈ = F + μr with μ = −(|ṙ|² + r·F)/L² keeping |r| = L (models/README.md "Spherical model")."""
     length = p[P_LENGTH]
     mu = -(vx * vx + vy * vy + vz * vz + x * fx + y * fy + z * fz) / (length * length)
     return fx + mu * x, fy + mu * y

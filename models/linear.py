@@ -3,7 +3,7 @@
     ẍ = −k²x + 2aẏ,   ÿ = −k²y − 2aẋ,   k² = g/L,   a = Ω_E sin φ
 
 Source: seed note eqs. (6)-(7), with its ω cos λ (λ = colatitude) written as Ω_E sin φ (φ = latitude);
-PHYSICS.md "Models" 1. Frame x South, y East, z Up. The Coriolis force does no work, so
+models/README.md "Linear planar model". Frame x South, y East, z Up. The Coriolis force does no work, so
 E = ½(ẋ² + ẏ²) + ½k²(x² + y²) is conserved exactly; the exact solution is in ``models.analytic``.
 """
 
@@ -19,7 +19,8 @@ def free_force(m, x, y, z, vx, vy, vz, p):
 
 
 def energy(m, x, y, vx, vy, p):
-    """E = ½(ẋ² + ẏ²) + ½k²(x² + y²) per unit mass (J/kg), conserved exactly (PHYSICS.md "Models" 1)."""
+    """E = ½(ẋ² + ẏ²) + ½k²(x² + y²) per unit mass (J/kg), conserved exactly (models/README.md "Energy and the Jacobi
+    integral")."""
     return 0.5 * (vx * vx + vy * vy) + 0.5 * p[P_K2] * (x * x + y * y)
 
 

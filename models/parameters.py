@@ -1,11 +1,11 @@
 """Physical parameters of one pendulum at one place, as one immutable, validated value.
 
-Convention (said once, here, and repeated in the README): the suite speaks in **latitude** φ, in degrees,
-positive north. The seed note (``shared/seed``) writes its rotation vector as ω(−sin λ, 0, cos λ) with λ the
-**colatitude**, so its ``ω cos λ`` is our ``Ω_E sin φ``. The local frame is the seed's: x South, y East,
-z Up (right-handed). Earth's rotation vector in that frame is Ω_E(−cos φ, 0, sin φ), and the textbook
-precession of the swing plane is −Ω_E sin φ about the local upward vertical: clockwise seen from above in the
-north, counter-clockwise in the south, none at the equator.
+Convention (said once, here, and in models/README.md "Frames and conventions"): the suite speaks in **latitude**
+φ, in degrees, positive north. The seed note (summarised in reports/README.md "The seed note") writes its rotation
+vector as ω(−sin λ, 0, cos λ) with λ the **colatitude**, so its ``ω cos λ`` is our ``Ω_E sin φ``. The local frame
+is the seed's: x South, y East, z Up (right-handed). Earth's rotation vector in that frame is Ω_E(−cos φ, 0, sin
+φ), and the textbook precession of the swing plane is −Ω_E sin φ about the local upward vertical: clockwise seen
+from above in the north, counter-clockwise in the south, none at the equator.
 
 All quantities are SI (m, s, rad/s) except the two angles, which are in degrees.
 
@@ -28,7 +28,8 @@ from typing import Any, Callable
 import numpy as np
 
 SIDEREAL_EARTH_RATE_RAD_S = 7.2921159e-5
-"""Earth's sidereal rotation rate 2π / 86164.0905 s (IERS conventions; PHYSICS.md "Frames")."""
+"""Earth's sidereal rotation rate 2π / 86164.0905 s (the mean sidereal day; models/README.md "Frames and
+conventions")."""
 
 STANDARD_GRAVITY_M_S2 = 9.81
 
@@ -109,7 +110,7 @@ class PendulumParameters:
 
     @property
     def textbook_precession_rate_rad_s(self) -> float:
-        """−Ω_E sin φ (rad/s), counter-clockwise about local up positive (PHYSICS.md "Frames")."""
+        """−Ω_E sin φ (rad/s), counter-clockwise about local up positive (models/README.md "Frames and conventions")."""
         return -self.vertical_rate_rad_s
 
     @property

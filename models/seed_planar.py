@@ -3,10 +3,10 @@
     ẍ = −(g/L)x + (2Ω_E cos φ / L)·x·ẏ + 2Ω_E sin φ·ẏ
     ÿ = −(g/L)y + (2Ω_E cos φ / L)·y·ẏ − 2Ω_E sin φ·ẋ
 
-Source: seed note eqs. (3)-(5) (its sin λ = cos φ, cos λ = sin φ); PHYSICS.md "Models" 3. Frame x South,
-y East, z Up. The x·ẏ and y·ẏ terms come from the tension T = m(g − 2Ω_E cos φ·ẏ) (seed eq. 3: the vertical
-Coriolis force) with every ż term dropped, while the geometric nonlinearity of the same swing (order (A/L)²,
-about 100× larger for real pendulums) is dropped too. The model therefore conserves **no** energy:
+Source: seed note eqs. (3)-(5) (its sin λ = cos φ, cos λ = sin φ); models/README.md "The seed's planar model".
+Frame x South, y East, z Up. The x·ẏ and y·ẏ terms come from the tension T = m(g − 2Ω_E cos φ·ẏ) (seed eq. 3: the
+vertical Coriolis force) with every ż term dropped, while the geometric nonlinearity of the same swing (order
+(A/L)², about 100× larger for real pendulums) is dropped too. The model therefore conserves **no** energy:
 
     dE/dt = (2Ω_E cos φ / L)·ẏ·(xẋ + yẏ)   for   E = ½(ẋ² + ẏ²) + ½(g/L)(x² + y²),
 

@@ -9,7 +9,7 @@ c = 1 keeps the centrifugal force, c = 0 drops it. The state is (x, y, ẋ, ẏ)
 
     h = ½|ṙ|² + g z − (c/2)|ω×r|²
 
-is conserved exactly. Source: PHYSICS.md "Models" 4 (d'Alembert's principle for a particle on a sphere in a
+is conserved exactly. Source: models/README.md "Spherical model" (d'Alembert's principle for a particle on a sphere in a
 rotating frame; e.g. Goldstein, Classical Mechanics, 3rd ed., §4.10 for the fictitious forces).
 """
 
@@ -38,7 +38,8 @@ def free_force(m, x, y, z, vx, vy, vz, p):
 
 
 def energy(m, x, y, vx, vy, p):
-    """Jacobi integral h = ½|ṙ|² + g z − (c/2)|ω×r|² (J/kg), conserved exactly (PHYSICS.md "Models" 4)."""
+    """Jacobi integral h = ½|ṙ|² + g z − (c/2)|ω×r|² (J/kg), conserved exactly (models/README.md "Energy and the
+    Jacobi integral")."""
     z, vz = sphere_height(m, x, y, vx, vy, p)
     wx = p[P_OMEGA_X]
     wy = p[P_OMEGA_Y]

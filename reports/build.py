@@ -19,8 +19,6 @@ small fixture without a database.
 
 from __future__ import annotations
 
-import argparse
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,7 +30,7 @@ from tqdm import tqdm
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.schema import COLUMN_NAMES
-from foucault_bench.bench.run.store import DEFAULT_DB, ResultsStore
+from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.reports.studies import STUDIES, ensure_studies
 from foucault_bench.integrators import STATUS_OK
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
@@ -45,7 +43,6 @@ from foucault_bench.reports.seed import seed_blocks
 if TYPE_CHECKING:
     from plotly.graph_objects import Figure as PlotlyFigure
 
-DEFAULT_OUT = Path("results") / "report"
 FIGURES = "figures"
 TABLES = "tables"
 
@@ -295,7 +292,7 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
             "Taylor batch integrator, one batch element per latitude; study `study_precession_latitude`) against "
             "the textbook −Ω_E sin φ. The residual follows the Airy correction (3/8)θ₀² of the finite swing "
             f"(θ₀ = A/L = {first['config_amplitude_m'] / first['config_length_m']:.3g}); the largest distance from "
-            f"it is {residual:.2g} Ω_E (release-side terms, PHYSICS.md 'Airy precession')."))
+            f"it is {residual:.2g} Ω_E (release-side terms, docs/models/README.md \"Airy precession\")."))
         builder.curves("study_precession_latitude",
                        "Precession rate against latitude; residual from −Ω_E sin φ in units of Ω_E.",
                        charts.precession_latitude(precession))
@@ -364,20 +361,8 @@ def build_report(inputs: ReportInputs, folder: Path, title: str = "foucault-benc
 
 
 # --------------------------------------------------------------------------------------------------------------
-# command line
+# the command (its options: bench.commands.report)
 # --------------------------------------------------------------------------------------------------------------
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--db", type=Path, default=DEFAULT_DB, help=f"results database (default {DEFAULT_DB})")
-    parser.add_argument("--matrix-id", default=None, help="matrix run id or unique prefix (default: the latest)")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"report folder (default {DEFAULT_OUT})")
-    parser.add_argument("--studies", choices=("stored", "recompute", "skip"), default="stored",
-                        help="study tables: read from the database and compute missing ones (stored, default), "
-                             "recompute all, or leave the study sections out (skip)")
-    parser.add_argument("--targets", type=float, nargs="+", default=list(DEFAULT_TARGETS), metavar="ERROR",
-                        help="target reference errors of the matched-accuracy summary (default: "
-                             f"{' '.join(f'{t:g}' for t in DEFAULT_TARGETS)})")
-
-
 def _provenance(store: ResultsStore, matrix_id: str) -> dict[str, str]:
     runs = store.matrix_runs()
     row = runs[runs["matrix_id"] == matrix_id]
@@ -390,27 +375,24 @@ def _provenance(store: ResultsStore, matrix_id: str) -> dict[str, str]:
     return {label: str(record[key]) for key, label in labels.items() if key in record and pd.notna(record[key])}
 
 
-def main(args: argparse.Namespace) -> int:
+def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "stored",
+                 targets: tuple[float, ...] = DEFAULT_TARGETS) -> int:
+    """``foucault-bench report``: the report of matrix run ``matrix_id`` (``None``: the latest) of database
+    ``db`` written to folder ``out``; ``studies`` is ``stored``, ``recompute`` or ``skip``. Exit status 0."""
     started = time.perf_counter()
-    problems = [f"--targets: a target error must be a finite number > 0, got {target:g}"
-                for target in args.targets if not (math.isfinite(target) and target > 0)]
-    if args.out.exists() and not args.out.is_dir():
-        problems.append(f"--out {args.out} exists and is not a folder")
-    if problems:
-        raise InputError(problems)
-    with ResultsStore(args.db, create=False) as store:
-        matrix_id = store.resolve_matrix_id(args.matrix_id)
+    with ResultsStore(db, create=False) as store:
+        matrix_id = store.resolve_matrix_id(matrix_id)
         runs = store.frame(matrix_id)
         if runs.empty:
-            raise InputError(f"matrix run {matrix_id} in {args.db} has no stored runs")
-        studies = {} if args.studies == "skip" else ensure_studies(store, recompute=args.studies == "recompute")
-        inputs = ReportInputs(runs=runs, studies=studies, adequacy=store.adequacy(matrix_id),
-                              provenance={"database": str(args.db), **_provenance(store, matrix_id)},
-                              targets=tuple(args.targets))
-    html_path, markdown_path = build_report(inputs, args.out, progress=True)
+            raise InputError(f"matrix run {matrix_id} in {db} has no stored runs")
+        study_tables = {} if studies == "skip" else ensure_studies(store, recompute=studies == "recompute")
+        inputs = ReportInputs(runs=runs, studies=study_tables, adequacy=store.adequacy(matrix_id),
+                              provenance={"database": str(db), **_provenance(store, matrix_id)},
+                              targets=targets)
+    html_path, markdown_path = build_report(inputs, out, progress=True)
     print(f"report written: {html_path} and {markdown_path} ({len(runs)} runs, "
-          f"{', '.join(STUDIES) if studies else 'no studies'}; {time.perf_counter() - started:.1f} s)")
+          f"{', '.join(STUDIES) if study_tables else 'no studies'}; {time.perf_counter() - started:.1f} s)")
     return 0
 
 
-__all__ = ["ReportInputs", "add_arguments", "build_report", "main"]
+__all__ = ["ReportInputs", "build_report", "write_report"]

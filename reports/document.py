@@ -4,12 +4,15 @@ One document model keeps index.html and REPORT.md identical in content. Figures 
 (``<stem>.png`` and ``<stem>.svg``); tables are embedded (HTML via pandas ``to_html``, Markdown via pandas
 ``to_markdown``, which uses ``tabulate``) and written beside it as CSV, Markdown, LaTeX and HTML files
 (``write_table_files``). Paths in blocks are relative to the document's folder, so the folder opens in a
-browser with no server.
+browser with no server. The reference notes a document cites (``docs/models/README.md "Airy precession"`` and
+the like) are copied from the installed package into its ``docs/`` folder (``copy_reference_docs``), so the
+folder reads on its own.
 """
 
 from __future__ import annotations
 
 import html
+import importlib.resources
 import math
 import re
 from dataclasses import dataclass, field
@@ -232,6 +235,7 @@ def write_document(folder: Path, title: str, blocks: list[Block], html_name: str
                    markdown_name: str = "REPORT.md") -> tuple[Path, Path]:
     """Write the HTML and Markdown renderings of ``blocks`` into ``folder``; return their paths."""
     folder.mkdir(parents=True, exist_ok=True)
+    copy_reference_docs(folder)
     html_path = folder / html_name
     markdown_path = folder / markdown_name
     html_path.write_text(render_html(title, blocks), encoding="utf-8")
@@ -243,3 +247,21 @@ def write_document(folder: Path, title: str, blocks: list[Block], html_name: str
         (folder / PLOTLY_JS).write_text(get_plotlyjs(), encoding="utf-8")
     markdown_path.write_text(render_markdown(title, blocks), encoding="utf-8")
     return html_path, markdown_path
+
+
+REFERENCE_DOCS = ("models", "integrators", "bench", "reports")
+"""Sub-packages whose README.md (package data) generated documents may cite, as ``docs/<package>/README.md``."""
+DOCS_FOLDER = "docs"
+
+
+def copy_reference_docs(folder: Path) -> list[Path]:
+    """Copy each ``foucault_bench.<package>/README.md`` of ``REFERENCE_DOCS`` to ``folder/docs/<package>/README.md``
+    (the layout of the repository, so the notes' links to each other keep working); return the paths written."""
+    written = []
+    for package in REFERENCE_DOCS:
+        source = importlib.resources.files(f"foucault_bench.{package}").joinpath("README.md")
+        target = folder / DOCS_FOLDER / package / "README.md"
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(source.read_text(encoding="utf-8"), encoding="utf-8")
+        written.append(target)
+    return written

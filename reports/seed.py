@@ -2,17 +2,17 @@
 
     foucault-bench seed [--out DIR]
 
-The seed note (shared/seed, Spanish) shows four figures: the first 2 minutes of its approximate analytic
-solution (eqs. 14-15, ω = 2π/24 h), its Euler solution of eqs. 4-5, that solution's relative energy error, and
-the numeric-minus-analytic difference. Each is redrawn here as the seed made it (with stated assumptions where the
-note gives no numbers) beside a corrected figure, and followed by one paragraph saying which claim holds and
-which does not, with numbers. The computations are ``reports.studies.seed_revisited`` (the suite's integrators
-and ``models.analytic``); this module only plots and writes. ``seed_blocks`` is also the report's section.
+The seed note (Spanish; summarised in reports/README.md "The seed note") shows four figures: the first 2 minutes
+of its approximate analytic solution (eqs. 14-15, ω = 2π/24 h), its Euler solution of eqs. 4-5, that solution's
+relative energy error, and the numeric-minus-analytic difference. Each is redrawn here as the seed made it (with
+stated assumptions where the note gives no numbers) beside a corrected figure, and followed by one paragraph
+saying which claim holds and which does not, with numbers. The computations are ``reports.studies.seed_revisited``
+(the suite's integrators and ``models.analytic``); this module only plots and writes. ``seed_blocks`` is also the
+report's section.
 """
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +24,6 @@ from foucault_bench.reports.charts import integrator_style, save
 from foucault_bench.reports.interactive import drawn_points, from_matplotlib
 from foucault_bench.reports.document import Block, Figure, Heading, Paragraph, write_document
 
-DEFAULT_OUT = Path("results") / "seed"
 GREY = "#7f7f7f"
 DAY_LENGTH_COLOUR = "#b8860b"
 """Curves that are no integrator's (the 24 h day) get colours outside the family palette (reports.charts)."""
@@ -219,7 +218,7 @@ def _findings(study: SeedStudy) -> dict[str, str]:
             f"seed's ({n['centrifugal_seed_x_m_s2']:.3g}, {n['centrifugal_seed_y_m_s2']:.3g}, 0). "
             f"**Holds:** the term is negligible, {n['centrifugal_over_gravity']:.1e} g here, as the seed says. "
             "Separately, eqs. 4-5 keep ω-terms about 100× smaller than the geometric nonlinearity of the swing "
-            "they drop (PHYSICS.md 'Models' 3): the suite's spherical model keeps both."),
+            "they drop (docs/models/README.md \"The seed's planar model\"): the suite's spherical model keeps both."),
     }
 
 
@@ -232,7 +231,8 @@ def seed_blocks(folder: Path, prefix: str) -> list[Block]:
     blocks: list[Block] = [
         Heading("The seed note revisited"),
         Paragraph(
-            "The seed note (shared/seed) solves the Foucault pendulum with an approximate analytic solution "
+            "The seed note (in Spanish; summarised in docs/reports/README.md \"The seed note\") solves the Foucault "
+            "pendulum with an approximate analytic solution "
             "(its eqs. 14-15) and explicit Euler on its eqs. 4-5. It gives ω = 2π/24 h and a 2-minute window but "
             f"no length, amplitude, latitude or step; we assume L = {c.length_m:g} m, y₀ = {c.amplitude_m:g} m, "
             f"latitude {c.latitude_deg:g}° (the seed's colatitude λ = {90 - c.latitude_deg:g}°), release from rest "
@@ -256,15 +256,11 @@ def seed_blocks(folder: Path, prefix: str) -> list[Block]:
     return blocks
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
-
-
-def main(args: argparse.Namespace) -> int:
-    if args.out.exists() and not args.out.is_dir():
-        raise InputError(f"--out {args.out} exists and is not a folder")
-    blocks = seed_blocks(args.out, "figures")
-    html_path, markdown_path = write_document(args.out, "The seed note revisited", blocks[1:],
-                                              markdown_name="SEED.md")
+def write_seed(out: Path) -> int:
+    """``foucault-bench seed``: the seed figures and findings written to folder ``out``. Exit status 0."""
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} exists and is not a folder")
+    blocks = seed_blocks(out, "figures")
+    html_path, markdown_path = write_document(out, "The seed note revisited", blocks[1:], markdown_name="SEED.md")
     print(f"seed figures and findings written: {html_path} and {markdown_path}")
     return 0

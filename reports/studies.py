@@ -32,7 +32,8 @@ import pandas as pd
 from tqdm import tqdm
 
 from foucault_bench.bench.problems.scenes import SEED_EARTH_RATE_RAD_S
-from foucault_bench.bench.run.store import ResultsStore, setting_label
+from foucault_bench.bench.run.store import ResultsStore
+from foucault_bench.bench.schema import setting_label
 from foucault_bench.bench.verdicts.columns import energy_scale, energy_verdicts, released_from_rest
 from foucault_bench.bench.verdicts.stability import measured_stability_limit, spectral_growth, step_matrix
 from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
@@ -233,11 +234,11 @@ def precession_vs_latitude(config: PrecessionLatitudeConfig = PrecessionLatitude
     One ``heyoka.taylor_adaptive_batch`` carries all latitudes (batch element i has the parameter vector of
     latitude i); a non-terminal event on r·ṙ = 0 crossing downwards (a maximum of the radius) records each
     turning point from heyoka's dense output, and ``bench.verdicts.turning_points.precession_rate`` fits the rate
-    (PHYSICS.md "Measuring the precession rate"). Events at t = 0 (release from rest) are dropped, as in the
+    (integrators/README.md "Measuring the precession rate"). Events at t = 0 (release from rest) are dropped, as in the
     fixed-step turning-point detector.
 
     Columns: latitude_deg, rate_rad_s, rate_stderr_rad_s, textbook_rate_rad_s (−Ω_E sin φ),
-    airy_rate_rad_s (−Ω_E sin φ (1 − (3/8)θ₀²), θ₀ = A/L; Airy 1851, Olsson 1981, PHYSICS.md "Airy precession"),
+    airy_rate_rad_s (−Ω_E sin φ (1 − (3/8)θ₀²), θ₀ = A/L; Airy 1851, Olsson 1981, models/README.md "Airy precession"),
     turning_points, plus the config's scalars.
     """
     import heyoka
@@ -379,14 +380,14 @@ class SeedStudy:
 
     ``series`` columns: t_s; seed_x_m, seed_y_m (eqs. 14-15, ω = 2π/24 h); exact_x_m, exact_y_m (exact linear
     solution, sidereal Ω_E); euler_x_m, euler_y_m, verlet_x_m, verlet_y_m (explicit Euler and Verlet on eqs. 4-5);
-    euler_amplitude_theory_m A·√((1 + (kh)²)ⁿ) (the amplitude the energy growth implies); euler_energy_rel_error, euler_energy_theory (1 + (kh)²)ⁿ − 1,
-    symplectic_energy_rel_error, verlet_energy_rel_error, model_energy_rel_error (the reference run of eqs.
-    4-5: the model's own energy change), model_energy_formula (∫ dE/dt of the model, PHYSICS.md "Models" 3);
-    seed_difference_m |r_Euler − r_eqs.14-15|; euler_error_m |r_Euler − r_ref|; model_difference_m
-    |r_ref(eqs. 4-5) − r_exact(eqs. 6-7)|; approximation_gap_m |r_eqs.14-15 − r_exact|;
-    approximation_gap_bound_m A·seed_gap_bound; day_length_difference_m |r_exact(sidereal) − r_exact(24 h)|;
-    verlet_linear_error_m |r_Verlet(eqs. 6-7) − r_exact|.
-    ``numbers``: scalar findings (SI units or dimensionless, named with their unit).
+    euler_amplitude_theory_m A·√((1 + (kh)²)ⁿ) (the amplitude the energy growth implies); euler_energy_rel_error,
+    euler_energy_theory (1 + (kh)²)ⁿ − 1, symplectic_energy_rel_error, verlet_energy_rel_error,
+    model_energy_rel_error (the reference run of eqs. 4-5: the model's own energy change), model_energy_formula (∫
+    dE/dt of the model, models/README.md "The seed's planar model"); seed_difference_m |r_Euler − r_eqs.14-15|;
+    euler_error_m |r_Euler − r_ref|; model_difference_m |r_ref(eqs. 4-5) − r_exact(eqs. 6-7)|; approximation_gap_m
+    |r_eqs.14-15 − r_exact|; approximation_gap_bound_m A·seed_gap_bound; day_length_difference_m
+    |r_exact(sidereal) − r_exact(24 h)|; verlet_linear_error_m |r_Verlet(eqs. 6-7) − r_exact|. ``numbers``: scalar
+    findings (SI units or dimensionless, named with their unit).
     """
 
     config: SeedConfig
@@ -448,7 +449,7 @@ def seed_revisited(config: SeedConfig = SeedConfig()) -> SeedStudy:
         Problem(model=linear, params=sidereal_params, t_out=t), step_s=config.euler_step_s), "Verlet (linear)")
 
     kh = seed_params.pendulum_frequency_rad_s * config.euler_step_s
-    # ∫ dE/dt dt along the reference, dE/dt = (2Ω_E cos φ / L) ẏ (xẋ + yẏ) (PHYSICS.md "Models" 3)
+    # ∫ dE/dt dt along the reference, dE/dt = (2Ω_E cos φ / L) ẏ (xẋ + yẏ) (models/README.md "The seed's planar model")
     coefficient = 2.0 * SEED_EARTH_RATE_RAD_S * math.cos(seed_params.latitude_rad) / config.length_m
     x, y, vx, vy = reference.T
     power = coefficient * vy * (x * vx + y * vy)

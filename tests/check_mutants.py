@@ -10,7 +10,7 @@ would leave the mutants in the registry for every other test; the test unregiste
   Hairer, Nørsett & Wanner, Solving ODEs I, §II.2), so the method is of order 2, not 4: a plausible typo that
   still gives a stable, convergent integrator with no obviously wrong output.
 * ``verlet_naive_coriolis``: velocity Verlet with the velocity-dependent Coriolis force evaluated explicitly in
-  both half kicks, the scheme PHYSICS.md ("Verlet with a Coriolis force") warns against: neither symplectic nor
+  both half kicks, the scheme integrators/README.md "Rotating-frame Verlet" warns against: neither symplectic nor
   volume-preserving, it opens the swing into an ellipse and lets the energy drift.
 """
 

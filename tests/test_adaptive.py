@@ -143,7 +143,8 @@ def test_turning_points_match_the_reference(name: str, model_name: str) -> None:
 
 @pytest.mark.parametrize("name", ADAPTIVE)
 def test_linear_turning_points_lie_on_the_textbook_azimuth(name: str) -> None:
-    """Exact linear solution: turning points at t_n = nπ/Ω on azimuth ψ₀ − a t_n (mod π), PHYSICS.md."""
+    """Exact linear solution: turning points at t_n = nπ/Ω on azimuth ψ₀ − a t_n (mod π), models/README.md "Closed
+    forms"."""
     solution = run(name, "linear", TIGHT)
     found = grid_turning_points(solution, "linear")
     big_omega = math.sqrt(SCENE.gravity_m_s2 / SCENE.length_m + SCENE.vertical_rate_rad_s**2)

@@ -1,4 +1,5 @@
-"""The closed forms: the seed's approximate solution differs from the exact one by what PHYSICS.md derives."""
+"""The closed forms: the seed's approximate solution differs from the exact one by what models/README.md "Closed
+forms" derives."""
 
 import numpy as np
 
@@ -21,7 +22,7 @@ def test_seed_gap_is_the_derived_amount_and_not_more() -> None:
     delta = (np.sqrt(k * k + a * a) - k) * t
     neglected = 1.01 * delta * np.sqrt(delta**2 / 4 + (a / k) ** 2) + (a / k) ** 2 * bound + 1e-15
     assert np.all(np.abs(gap - bound) <= neglected)
-    # PHYSICS.md: 3.7e-4 of the amplitude over one day at the Panthéon.
+    # models/README.md "Closed forms": 3.7e-4 of the amplitude over one day at the Panthéon.
     assert 3.6e-4 < gap.max() < 3.8e-4
 
 

@@ -1,4 +1,4 @@
-"""Tests of the CI gate ``foucault-bench check`` (bench/gate/check.py) and its shipped thresholds.
+"""Tests of the CI gate ``foucault-bench check`` (bench/gate/) and its shipped thresholds.
 
 What they prove:
 
@@ -30,15 +30,10 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from foucault_bench.bench.gate.check import (
-    ERROR_COLUMNS,
-    evaluate,
-    headroom,
-    load_thresholds,
-    parse_thresholds,
-    render,
-    validate_against,
-)
+from foucault_bench.bench.gate.evaluate import evaluate, headroom
+from foucault_bench.bench.gate.render import render
+from foucault_bench.bench.gate.select import validate_against
+from foucault_bench.bench.gate.thresholds import ERROR_COLUMNS, load_thresholds, parse_thresholds
 from foucault_bench.bench.cli import main
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.schema import COLUMN_NAMES
@@ -173,7 +168,7 @@ def test_wrong_integrators_fail_the_shipped_bounds(gate_run):
             assert any(classname == f"check.{scene}.rk4_wrong_weights" and name.endswith(f"order of {column} >= 3.5")
                        for classname, name in failed), (scene, column, failed)
     # The explicit Coriolis kick opens the swing into an ellipse, which the spherical model turns into a fake
-    # Airy precession (PHYSICS.md "Verlet with a Coriolis force").
+    # Airy precession (integrators/README.md "Rotating-frame Verlet").
     assert any(classname == "check.lab_3m_90s.verlet_naive_coriolis" and "precession_rate_ref_error" in name
                for classname, name in failed)
     assert re.search(r"bound #\d+ lab_3m_90s verlet_naive_coriolis \S+: precession_rate_ref_error_earth <= \S+ "
@@ -226,10 +221,9 @@ def test_malformed_toml_exits_2(tmp_path, capsys):
 
 
 def test_documented_example_is_a_valid_thresholds_file():
-    """The complete example of the README section (docs_check_section.md until the lead merges it into
-    README.md) parses and names only real scenes, integrators and columns."""
-    texts = [path.read_text(encoding="utf-8") for path in (ROOT / "README.md", ROOT / "docs_check_section.md")
-             if path.exists()]
+    """The complete example of bench/README.md "The gate" parses and names only real scenes, integrators and
+    columns (tests/test_docs.py also runs the documented examples)."""
+    texts = [(ROOT / "bench" / "README.md").read_text(encoding="utf-8")]
     examples = [block for text in texts for block in re.findall(r"```toml\n(# thresholds example.*?)```", text, re.S)]
     assert examples, "the README's complete thresholds example is missing"
     thresholds = parse_thresholds(tomllib.loads(examples[0]), source="README example")

@@ -1,13 +1,14 @@
 """Fixed-step schemes: observed convergence order, linear stability limits, Euler's energy growth, streaming.
 
-Every sweep comes from what an integrator declares (``integrators.base.Integrator``), never from a table of
-names, and runs over the built-in integrators (plug-ins are checked by their authors with ``foucault-bench
-selftest``, which runs the same code, so an installed plug-in cannot fail this suite): the order test runs for every fixed-step integrator with a declared order on every model, with the
-step sweep and the fit of ``bench.gate.conformance.measure_order`` (the code behind ``foucault-bench
-selftest``); the stability test runs for every integrator that declares a stability limit. Theory
-(Hairer, Nørsett & Wanner, Solving ODEs I, §IV.2): on ẍ = −k²x explicit Euler multiplies the energy by exactly
-(1 + (kh)²) per step; RK4 is stable for kh ≤ 2√2; Störmer–Verlet for kh < 2. At the equator, or with Earth's
-rotation off, the linear model is exactly that oscillator (in 2-D).
+Every sweep comes from what an integrator declares (``integrators.base.Integrator``), never from a table of names,
+and runs over the built-in integrators (plug-ins are checked by their authors with ``foucault-bench selftest``,
+which runs the same code, so an installed plug-in cannot fail this suite): the order test runs for every
+fixed-step integrator with a declared order on every model, with the step sweep and the fit of
+``bench.gate.conformance.measure_order`` (the code behind ``foucault-bench selftest``); the stability test runs
+for every integrator that declares a stability limit. Theory (integrators/README.md "Fixed-step methods on this
+problem"; Hairer & Wanner, Solving ODEs II, §IV.2): on ẍ = −k²x explicit Euler multiplies the energy by exactly
+(1 + (kh)²) per step; RK4 is stable for kh ≤ 2√2; Störmer–Verlet for kh < 2. At the equator, or with Earth's rotation
+off, the linear model is exactly that oscillator (in 2-D).
 """
 
 from __future__ import annotations
@@ -78,7 +79,8 @@ def test_output_grid_stride_and_counters(integrator_name: str) -> None:
 
 
 def test_turning_points_are_streamed_on_the_textbook_azimuth() -> None:
-    """RK4 on the linear model: turning points every half period on azimuth ψ₀ − a t (PHYSICS.md)."""
+    """RK4 on the linear model: turning points every half period on azimuth ψ₀ − a t (models/README.md
+    "Closed forms")."""
     period = PARIS.small_swing_period_s
     problem = Problem(MODELS["linear"], PARIS, np.linspace(0.0, 50 * period, 51))
     solution = get_integrator("rk4").solve(problem, step_s=period / 400)

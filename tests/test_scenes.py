@@ -62,7 +62,7 @@ def test_each_built_in_scene_is_complete_and_its_grid_is_uniform(name: str) -> N
 
 @pytest.mark.parametrize("name", REAL_PENDULUMS)
 def test_real_scenes_turn_at_the_quoted_rate(name: str) -> None:
-    # PHYSICS.md "Real pendulums": degrees per hour, clockwise in the north (negative here)
+    # models/README.md "Real pendulums": degrees per hour, clockwise in the north (negative here)
     quoted = {"pantheon": -11.3, "un_headquarters": -9.8, "griffith": -8.4, "south_pole": 15.04, "lab_3m": -9.76}
     rate_deg_h = math.degrees(SCENES[name].params.textbook_precession_rate_rad_s) * 3600.0
     assert rate_deg_h == pytest.approx(quoted[name], abs=0.05)

@@ -21,10 +21,9 @@ from foucault_bench.reports.simulate import (
     InteractiveSimulation,
     SimulationResult,
     SimulationSettings,
-    add_arguments,
     save_animation,
-    settings_from_args,
 )
+from foucault_bench.bench.commands.simulate import add_arguments, settings_from_args
 
 SMALL = SimulationSettings(length_m=10.0, amplitude_m=0.5, hours=0.25, latitude_deg=48.846, integrator="verlet",
                            model="linear", setting=0.05)

@@ -1,7 +1,8 @@
 """The study computations of reports.studies, at small sizes, against what the physics and numerics say
-(PHYSICS.md "Integrators", "Airy precession"): explicit Euler's energy grows as (1 + (kh)²)ⁿ, Verlet's stays
-within (kh)²/4, each fixed-step integrator is stable below its declared limit and blows up above it, and the
-measured precession follows −Ω_E sin φ with the Airy correction at every latitude."""
+(integrators/README.md "Fixed-step methods on this problem"; models/README.md "Airy precession"): explicit Euler's
+energy grows as (1 + (kh)²)ⁿ, Verlet's stays within (kh)²/4, each fixed-step integrator is stable below its
+declared limit and blows up above it, and the measured precession follows −Ω_E sin φ with the Airy correction at
+every latitude."""
 
 from __future__ import annotations
 
@@ -150,7 +151,7 @@ def test_precession_follows_the_airy_corrected_textbook_rate() -> None:
     table = precession_vs_latitude(config, progress=False)
     assert list(table["latitude_deg"]) == list(np.linspace(-90.0, 90.0, 7))
     theta0 = config.amplitude_m / config.length_m
-    # Beyond Airy's (3/8)θ₀² the release side adds a term of order θ₀³ (PHYSICS.md "Airy precession"):
+    # Beyond Airy's (3/8)θ₀² the release side adds a term of order θ₀³ (models/README.md "Airy precession"):
     # allow θ₀³·Ω_E (four times ¼θ₀³) plus three standard errors.
     tolerance = theta0**3 * SIDEREAL_EARTH_RATE_RAD_S + 3.0 * table["rate_stderr_rad_s"]
     assert np.all(np.abs(table["rate_rad_s"] - table["airy_rate_rad_s"]) <= tolerance)

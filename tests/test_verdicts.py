@@ -119,7 +119,7 @@ def test_linear_reference_rate_is_the_textbook_rate() -> None:
 
 @pytest.mark.parametrize("scene_name, duration_s", [("airy_3m", 540.0), ("south_pole", 1200.0)])
 def test_spherical_reference_rate_follows_airy(scene_name: str, duration_s: float) -> None:
-    """Released from rest, the spherical pendulum's plane turns at −Ω_E sin φ (1 − (3/8)θ₀²) (PHYSICS.md "Airy
+    """Released from rest, the spherical pendulum's plane turns at −Ω_E sin φ (1 − (3/8)θ₀²) (models/README.md "Airy
     precession"). Neglected terms, relative to Ω_E sin φ: the next order of the amplitude expansion, c₄θ₀⁴, and the
     release-side term c₃θ₀³ cot φ cos ψ (from the horizontal part of ω, which pushes a North-South swing sideways;
     ψ is the swing's azimuth from South, so it vanishes for an East-West swing and at the poles). Their
@@ -146,8 +146,9 @@ def test_spherical_reference_rate_follows_airy(scene_name: str, duration_s: floa
 
 
 def test_rk4_precession_error_is_the_predicted_lag() -> None:
-    # RK4 on the oscillator: the plane precesses too slowly by (kh)⁴/24 (PHYSICS.md "Integrators"); the verdict
-    # must see that lag, with its sign, to within the next order (kh)² and the measurement bound
+    # RK4 on the oscillator: the plane precesses too slowly by (kh)⁴/24 (integrators/README.md "Fixed-step
+    # methods on this problem"); the verdict must see that lag, with its sign, to within the next order (kh)²
+    # and the measurement bound
     scene = SCENES["pantheon"]
     k = scene.params.pendulum_frequency_rad_s
     solution = get_integrator("rk4").solve(scene.problem(), step_s=0.08 / k)
@@ -170,7 +171,7 @@ def test_an_accurate_run_has_small_verdicts_and_the_reference_has_none() -> None
     assert verdicts["energy_max_rel_error"] < 1e-13
     assert verdicts["reference_error"] < 1e-12
     assert verdicts["analytic_gap_exact"] < 1e-12
-    # the seed's approximate solution misses the ellipse: its gap is ≈ a/k (PHYSICS.md "Models" 2)
+    # the seed's approximate solution misses the ellipse: its gap is ≈ a/k (models/README.md "Closed forms")
     a_over_k = scene.params.vertical_rate_rad_s / scene.params.pendulum_frequency_rad_s
     assert 0.9 * a_over_k < verdicts["analytic_gap_seed"] < 1.1 * a_over_k
     itself = Solution(t=reference.t, y=reference.y)
@@ -185,7 +186,8 @@ def test_energy_error_is_relative_to_the_swing_and_matches_the_streamed_steps() 
     solution = get_integrator("verlet").solve(scene.problem(), step_s=scene.output_interval_s)
     verdicts = compute_verdicts(scene, solution, None)
     assert verdicts["energy_max_rel_error_steps"] == pytest.approx(verdicts["energy_max_rel_error"], rel=1e-9)
-    # Verlet's energy error oscillates with amplitude ≈ (kh)²/4 of the swing energy (PHYSICS.md "Integrators"),
+    # Verlet's energy error oscillates with amplitude ≈ (kh)²/4 of the swing energy
+    # (integrators/README.md "Fixed-step methods on this problem"),
     # not of the Jacobi integral's |E₀| ≈ gL, which is 2/θ₀² = 800 times larger here
     kh = scene.params.pendulum_frequency_rad_s * scene.output_interval_s
     assert 0.5 * kh**2 / 4 < verdicts["energy_max_rel_error"] < 2.0 * kh**2 / 4

@@ -16,7 +16,8 @@ PARIS = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
 
 
 def _fitted_precession_rate(turning: np.ndarray) -> float:
-    """Least-squares slope of the unwrapped swing azimuth (rad/s); PHYSICS.md "Measuring the precession rate"."""
+    """Least-squares slope of the unwrapped swing azimuth (rad/s); integrators/README.md "Measuring the precession
+    rate"."""
     azimuth = np.unwrap(2 * np.arctan2(turning[:, 2], turning[:, 1])) / 2
     return float(np.polyfit(turning[:, 0], azimuth, 1)[0])
 
@@ -25,7 +26,7 @@ def test_verlet_precesses_at_the_textbook_rate_where_rk4_of_equal_cost_does_not(
     """On the isotropic linear model the rotation and the oscillator commute, so the Verlet orbit's
     orientation turns at exactly −a; only the O((kh)²) interpolation of turning points between steps remains,
     and it oscillates instead of accumulating. RK4 at the same cost (2 evaluations per step against 4, so twice
-    the step) is too slow by ≈ (kh)⁴/24 (PHYSICS.md "Integrators")."""
+    the step) is too slow by ≈ (kh)⁴/24 (integrators/README.md "Fixed-step methods on this problem")."""
     period = PARIS.small_swing_period_s
     a = PARIS.vertical_rate_rad_s
     grid = np.linspace(0.0, 200 * period, 201)

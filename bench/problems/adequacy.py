@@ -1,9 +1,9 @@
 """Model adequacy: what a scene would get wrong with another model of the hierarchy, measured, not argued.
 
-The models form a hierarchy that each model declares (``Model.refines``; ``models.simpler_models``,
-``models.richer_models``): today linear planar (seed eqs. 6-7) < the seed's nonlinear planar (eqs. 4-5) < the
-spherical pendulum with the full rotation vector. For a scene, every pair of models in which the scene's
-model takes part is integrated with the reference integrator on the scene's grid (each run is a
+The models form a hierarchy (models/README.md "The three models") that each model declares (``Model.refines``;
+``models.simpler_models``, ``models.richer_models``): today linear planar (seed eqs. 6-7) < the seed's nonlinear
+planar (eqs. 4-5) < the spherical pendulum with the full rotation vector. For a scene, every pair of models in
+which the scene's model takes part is integrated with the reference integrator on the scene's grid (each run is a
 cached ``bench.problems.reference`` of the scene with the model replaced) and compared:
 
 * ``precession_rate_diff``: (rate of the simpler model − rate of the richer) / (Ω_E|sin φ|), signed, from the
@@ -14,7 +14,7 @@ Rows where the scene's model is the richer one say what each simpler model gets 
 not enough if these exceed what the scene measures); for scenes on a planar model, rows where the scene's
 model is the simpler one say what it leaves out compared with the richer models (``scene_model`` tells which
 side of the pair the scene is on). Leading-order expectations are given where the physics provides them:
-planar vs spherical differ in rate by the Airy term −sign(sin φ)(3/8)θ₀² (PHYSICS.md "Airy precession";
+planar vs spherical differ in rate by the Airy term −sign(sin φ)(3/8)θ₀² (models/README.md "Airy precession";
 Olsson, Am. J. Phys. 49, 531, 1981) and in swing frequency by the finite-amplitude term k θ₀²/16 (Landau &
 Lifshitz, Mechanics, §28, eq. 28.13), which moves the trajectories apart by ≈ 2|sin(½ k θ₀² t / 16)| · A.
 

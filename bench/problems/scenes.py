@@ -1,19 +1,19 @@
 """Scenes: a pendulum at a place, a model, a duration and one output grid shared by every integrator.
 
 A scene fixes everything about a benchmark run except the integrator and its setting. Built-in scenes are the
-real pendulums of PHYSICS.md ("Real pendulums") plus an Airy scene and the seed note's own setting; a matrix
+real pendulums of models/README.md "Real pendulums" plus an Airy scene and the seed note's own setting; a matrix
 file may define more inline (``[scene.NAME]`` tables, read by ``scene_from_mapping``), optionally starting from
 a built-in one (``base = "pantheon"``).
 
 How the built-in scenes were chosen:
 
-* **Model.** The simplest model of the hierarchy (PHYSICS.md "Models": linear < seed's planar < spherical)
-  that resolves the precession rate to the precision its source quotes it. The linear model neglects the Airy
-  precession (3/8)θ₀² (θ₀ = A/L), the release-side term ≈ ¼θ₀³cot φ and the centrifugal anisotropy; a scene
-  is linear when these stay well below the rounding of the quoted rate, spherical otherwise. Each scene's
+* **Model.** The simplest model of the hierarchy (models/README.md "The three models": linear < seed's planar
+  < spherical) that resolves the precession rate to the precision its source quotes it. The linear model neglects
+  the Airy precession (3/8)θ₀² (θ₀ = A/L), the release-side term ≈ ¼θ₀³cot φ and the centrifugal anisotropy; a
+  scene is linear when these stay well below the rounding of the quoted rate, spherical otherwise. Each scene's
   ``why_model`` gives its numbers; ``bench.problems.adequacy`` measures what the other models would change.
-* **Amplitude.** Not well sourced for any real pendulum (PHYSICS.md): each scene states the amplitude it
-  assumes, a swing of θ₀ ≈ 0.045-0.05 rad unless the scene is about large swings.
+* **Amplitude.** Not well sourced for any real pendulum (models/README.md "Real pendulums"): each scene states
+  the amplitude it assumes, a swing of θ₀ ≈ 0.045-0.05 rad unless the scene is about large swings.
 * **Duration.** Cost grows with the number of swings, so each real scene lasts 200-520 small-swing periods
   (30 min to 1 h), enough for the swing plane to turn 5-15°; the default matrix (every integrator family
   over a work-precision sweep of every real scene) then stays within minutes on 2 cores, and the real128
@@ -27,18 +27,20 @@ How the built-in scenes were chosen:
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import math
 import re
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
 from foucault_bench.bench.errors import InputError
-from foucault_bench.integrators import Problem
+from foucault_bench.bench.validation import finite_number, is_number, suggestion
 from foucault_bench.models import MODELS, SIDEREAL_EARTH_RATE_RAD_S, Model, PendulumParameters, get_model
 from foucault_bench.models.parameters import STANDARD_GRAVITY_M_S2
+
+if TYPE_CHECKING:
+    from foucault_bench.integrators import Problem
 
 MIN_OUTPUT_INTERVALS_PER_PERIOD = 5.0
 """The output interval must be at most 1/5 of the small-swing period: turning points are located on the grid
@@ -89,7 +91,7 @@ class Scene:
         if not SCENE_NAME_PATTERN.match(self.name):
             problems.insert(0, f"scene name {self.name!r} may hold only letters, digits, '_', '.' and '-'")
         if self.model not in MODELS:
-            problems.insert(0, f"model: unknown model {self.model!r}{_suggestion(self.model, MODELS)}; "
+            problems.insert(0, f"model: unknown model {self.model!r}{suggestion(self.model, MODELS)}; "
                                f"known models: {', '.join(MODELS)}")
         if problems:
             raise InputError(problems)
@@ -108,6 +110,8 @@ class Scene:
 
     def problem(self) -> Problem:
         """The integration problem: model, parameters and the scene's output grid."""
+        from foucault_bench.integrators import Problem  # here: reading scenes needs no integrator
+
         return Problem(model=self.model_object, params=self.params, t_out=self.output_grid())
 
 
@@ -115,9 +119,9 @@ def grid_problems(period_s: float, duration_s: float, output_interval_s: float) 
     """What is wrong with a duration and output interval for a pendulum of small-swing period ``period_s``
     (empty list: nothing)."""
     problems: list[str] = []
-    if not (_is_number(duration_s) and math.isfinite(duration_s) and duration_s > 0):
+    if not (finite_number(duration_s, positive=True)):
         problems.append(f"duration_s must be a number of seconds > 0, got {duration_s!r}")
-    if not (_is_number(output_interval_s) and math.isfinite(output_interval_s) and output_interval_s > 0):
+    if not (finite_number(output_interval_s, positive=True)):
         problems.append(f"output_interval_s must be a number of seconds > 0, got {output_interval_s!r}")
     if problems:
         return problems
@@ -176,7 +180,7 @@ def scene_from_mapping(name: str, mapping: Mapping[str, Any]) -> Scene:
         raise InputError([f"a scene must be a table of fields, got {mapping!r}"])
     for key in mapping:
         if key not in SCENE_KEYS:
-            problems.append(f"unknown key {key!r}{_suggestion(str(key), SCENE_KEYS)}; "
+            problems.append(f"unknown key {key!r}{suggestion(str(key), SCENE_KEYS)}; "
                             f"known keys: {', '.join(SCENE_KEYS)}")
     values: dict[str, Any] = {}
     base_name = mapping.get("base")
@@ -190,7 +194,7 @@ def scene_from_mapping(name: str, mapping: Mapping[str, Any]) -> Scene:
                                     f"for the changed fields): {base.why_model}",
                           assumptions=base.assumptions)
         else:
-            problems.append(f"base: unknown scene {base_name!r}{_suggestion(str(base_name), SCENES)}; "
+            problems.append(f"base: unknown scene {base_name!r}{suggestion(str(base_name), SCENES)}; "
                             f"built-in scenes: {', '.join(SCENES)}")
     values.update({key: value for key, value in mapping.items() if key in SCENE_KEYS and key != "base"})
     if base_name is None:
@@ -240,24 +244,25 @@ def _field_problems(values: Mapping[str, Any]) -> list[str]:
         if key not in values:
             continue
         value = values[key]
-        if not _is_number(value) or not math.isfinite(value):
-            problems.append(f"{key} must be a finite number ({unit}), got {value!r}")
+        if not finite_number(value):
+            shown = repr(value) if len(repr(value)) <= 40 else f"{repr(value)[:20]}…({len(repr(value))} characters)"
+            problems.append(f"{key} must be a finite number ({unit}), got {shown}")
         elif not in_range(value):
             problems.append(f"{key} must be {condition} ({unit}), got {value!r}")
     length, amplitude = values.get("length_m"), values.get("amplitude_m")
-    if _is_number(length) and _is_number(amplitude) and length > 0 and amplitude >= length:
+    if is_number(length) and is_number(amplitude) and length > 0 and amplitude >= length:
         problems.append(f"amplitude_m = {amplitude!r} m must be less than length_m = {length!r} m "
                         "(the release point lies on the sphere of radius L, below the pivot)")
     velocity = values.get("release_velocity_m_s")
     if velocity is not None and not (
         isinstance(velocity, (list, tuple)) and len(velocity) == 2
-        and all(_is_number(v) and math.isfinite(v) for v in velocity)
+        and all(finite_number(v) for v in velocity)
     ):
         problems.append(f"release_velocity_m_s must be a pair [vx, vy] of finite numbers (m/s), got {velocity!r}")
     if "centrifugal" in values and not isinstance(values["centrifugal"], bool):
         problems.append(f"centrifugal must be true or false, got {values['centrifugal']!r}")
     if "model" in values and values["model"] not in MODELS:
-        problems.append(f"model: unknown model {values['model']!r}{_suggestion(str(values['model']), MODELS)}; "
+        problems.append(f"model: unknown model {values['model']!r}{suggestion(str(values['model']), MODELS)}; "
                         f"known models: {', '.join(MODELS)}")
     for key in TEXT_KEYS:
         if key in values and not isinstance(values[key], str):
@@ -270,15 +275,6 @@ def _field_problems(values: Mapping[str, Any]) -> list[str]:
         interval = values.get("output_interval_s", default_output_interval(period, values["duration_s"]))
         problems += grid_problems(period, values["duration_s"], interval)
     return problems
-
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
-
-
-def _suggestion(word: str, choices) -> str:
-    close = difflib.get_close_matches(word, list(choices), n=1)
-    return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 # --- the built-in scenes -----------------------------------------------------------------------------------------
@@ -318,7 +314,7 @@ def _builtin_scenes() -> dict[str, Scene]:
             duration_s=3600.0,
             output_interval_s=2.0,
             why_model=_linear_why(3.0 / 67.0, "11.3°/h clockwise", 0.05 / 11.3, 48.846),
-            source="PHYSICS.md 'Real pendulums': Foucault's Panthéon pendulum, 1851 (C. R. Acad. Sci. 32, 135): "
+            source="Foucault, C. R. Acad. Sci. Paris 32, 135 (1851); Aczel, Pendulum (2003): the Panthéon pendulum: "
                    "L = 67 m, 28 kg bob, period 16.4 s, 11.3°/h clockwise.",
             assumptions="amplitude 3 m (the figure commonly given); released from rest towards the East; "
                         "1 h (219 periods, the plane turns 11.3°); output every 2 s (≈ period/8.2).",
@@ -331,7 +327,8 @@ def _builtin_scenes() -> dict[str, Scene]:
             duration_s=3600.0,
             output_interval_s=1.25,
             why_model=_linear_why(1.0 / 22.9, "9.8°/h clockwise", 0.05 / 9.8, 40.749),
-            source="PHYSICS.md 'Real pendulums': UN headquarters, New York: L = 22.9 m, 91 kg bob, period 9.6 s, "
+            source="United Nations gift record UNNY134G (Foucault Pendulum, 1955): wire 75 ft = 22.9 m, "
+                   "200 lb = 91 kg bob; period 9.6 s, "
                    "9.8°/h clockwise.",
             assumptions="amplitude 1 m (θ₀ ≈ 0.044, not sourced); released from rest towards the East; 1 h "
                         "(375 periods); output every 1.25 s (≈ period/7.7).",
@@ -344,7 +341,7 @@ def _builtin_scenes() -> dict[str, Scene]:
             duration_s=1800.0,
             output_interval_s=0.9,
             why_model=_linear_why(0.6 / 12.2, "8.4°/h clockwise", 0.05 / 8.4, 34.118),
-            source="PHYSICS.md 'Real pendulums': Griffith Observatory, Los Angeles: L = 12.2 m, 109 kg bob, "
+            source="Griffith Observatory exhibit description: cable 40 ft = 12.2 m, 240 lb = 109 kg bob; "
                    "period 7.0 s, 8.4°/h clockwise.",
             assumptions="amplitude 0.6 m (θ₀ ≈ 0.049, not sourced); released from rest towards the East; "
                         "30 min (257 periods, the plane turns 4.2°); output every 0.9 s (≈ period/7.8).",
@@ -358,7 +355,8 @@ def _builtin_scenes() -> dict[str, Scene]:
             output_interval_s=1.5,
             why_model=_spherical_why(1.5 / 33.0, "15.04°/h counter-clockwise", 0.005 / 15.04)
             + " At the pole ω is vertical: no release-side term, the Airy correction appears alone.",
-            source="PHYSICS.md 'Real pendulums': Amundsen-Scott South Pole station (2001): L = 33 m, 25 kg bob, "
+            source="Baker, Seven Tales of the Pendulum (OUP 2011), Tale 1: Amundsen-Scott South Pole station "
+                   "(2001): L = 33 m, 25 kg bob, "
                    "period 11.5 s, 15.04°/h counter-clockwise.",
             assumptions="amplitude 1.5 m (θ₀ ≈ 0.045, not sourced); released from rest along azimuth 90°; "
                         "1 h (313 periods, the plane turns 15°); output every 1.5 s (≈ period/7.7).",
@@ -371,7 +369,7 @@ def _builtin_scenes() -> dict[str, Scene]:
             duration_s=1800.0,
             output_interval_s=0.45,
             why_model=_spherical_why(0.15 / 3.0, "9.76°/h clockwise", 0.005 / 9.76),
-            source="arXiv:0902.1829 via PHYSICS.md 'Real pendulums': L = 3 m, period 3.47 s, latitude 40.44° N, "
+            source="Schumacher & Tarbet, arXiv:0902.1829 (2009): L = 3 m, period 3.47 s, latitude 40.44° N, "
                    "9.76°/h clockwise.",
             assumptions="amplitude 0.15 m (θ₀ = 0.05, not sourced); released from rest towards the East; 30 min "
                         "(518 periods, the plane turns 4.9°); output every 0.45 s (≈ period/7.7).",
@@ -387,7 +385,8 @@ def _builtin_scenes() -> dict[str, Scene]:
                       "of the Coriolis-made ellipse, −Ω_E sin φ·(1 − (3/8)θ₀²), 3.4 % slower at θ₀ = 0.3 "
                       "(Airy 1851; Olsson, Am. J. Phys. 49, 531, 1981). Only the spherical model has it: both "
                       "planar models lack the geometric nonlinearity that makes it.",
-            source="PHYSICS.md 'Airy precession'; pendulum of arXiv:0902.1829 (L = 3 m, 40.44° N).",
+            source="Airy, Mem. R. Astron. Soc. 20, 121 (1851); pendulum of Schumacher & Tarbet, arXiv:0902.1829 "
+                   "(L = 3 m, 40.44° N).",
             assumptions="amplitude 0.9 m (θ₀ = 0.3, a deliberately large swing); released from rest towards the "
                         "East, where the release-side term (∝ cos of the release azimuth from South) vanishes; "
                         "30 min (≈ 516 periods); output every 0.45 s.",

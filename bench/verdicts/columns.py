@@ -11,9 +11,9 @@ comparison is fair and the numbers are deterministic (same inputs → same bits 
   E₀ ≈ −gL while E_swing ≈ gA²/2L, and dividing by |E₀| would make the same error look 2/θ₀² times smaller.
   Reported: max |·|, least-squares slope in t, and the streamed per-step max rescaled to E_swing.
 * **Precession** (``turning_points_from_grid``, ``precession_rate``): turning points of the swing (maxima of
-  the radius) located on a quintic Hermite interpolant of the grid (positions, velocities, and accelerations
+  the radius) located on a local Hermite interpolant of the grid (positions, velocities, and accelerations
   from the model), their azimuths ψ unwrapped as 2ψ, halved, and fitted by a straight line in t
-  (PHYSICS.md "Measuring the precession rate"). The rate is compared with −Ω_E sin φ and with the
+  (integrators/README.md "Measuring the precession rate"). The rate is compared with −Ω_E sin φ and with the
   reference's rate measured the same way on the same grid.
 * **Trajectory**: max over the grid of |r − r_other|/A against the exact linear solution, the seed's
   approximate solution (``models.analytic``) and the reference.

@@ -1,7 +1,7 @@
 """Turning points of the swing and the precession rate measured from them, with the interpolation's error
 bounds (``bench.verdicts.columns`` turns them into verdict columns).
 
-Turning points (maxima of the radius) are located on a quintic Hermite interpolant of the output grid
+Turning points (maxima of the radius) are located on a local Hermite interpolant of the output grid
 (positions, velocities, and accelerations from the model); their azimuths ψ are unwrapped as 2ψ, halved, and
 fitted by a straight line in t. The same procedure serves every integrator and the reference.
 """
@@ -179,7 +179,8 @@ def precession_rate(turning_points: np.ndarray) -> tuple[float, float]:
     seen from above); consecutive turning points lie at opposite ends of the swing, ψ and ψ + π, so ψ is
     followed modulo π (``unwrapped_azimuth``); the rate is the least-squares slope of ψ against t, computed on centred data, with
     the usual standard error √(Σ residual² / (N − 2) / Σ(t − t̄)²) (e.g. NIST/SEMATECH e-Handbook of
-    Statistical Methods, §4.1.4.1; PHYSICS.md "Measuring the precession rate"). NaN with fewer than 3 points.
+    Statistical Methods, §4.1.4.1; integrators/README.md "Measuring the precession rate"). NaN with fewer than 3
+    points.
     """
     points = np.asarray(turning_points, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] < 3:

@@ -1,0 +1,178 @@
+"""The documentation is true to the code: every TOML example in the READMEs loads (and the cheap ones run), every
+relative link and cited path exists, every cited section exists, the README's test command is the one CI runs,
+and nothing cites a file that is not in the repository."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from foucault_bench.bench.cli import main as cli_main
+from foucault_bench.bench.gate.select import planned_rows, validate_against
+from foucault_bench.bench.gate.thresholds import load_thresholds
+from foucault_bench.bench.run.matrix import load_matrix
+from foucault_bench.bench.schema import markdown_table
+from foucault_bench.reports.document import REFERENCE_DOCS, copy_reference_docs
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE_DOCS = tuple(ROOT / package / "README.md" for package in REFERENCE_DOCS)
+DOCS = (ROOT / "README.md", *PACKAGE_DOCS)
+
+CHEAP_SCENE_S = 300.0
+"""A documented matrix whose scenes all last at most this long (seconds of pendulum time) is run, not only loaded."""
+
+TOML_BLOCK = re.compile(r"```toml\n(.*?)```", re.S)
+EXAMPLE_NAME = re.compile(r"^# (matrix|thresholds) example: (\S+\.toml)", re.M)
+CITATION = re.compile(
+    r"((?:docs/)?(?:models|integrators|bench|reports)/README\.md)[`)\]]*[ ,]*(?:\\?\"([^\"\\]+)\\?\"|'([^']+)')")
+MARKDOWN_LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
+CODE_SPAN = re.compile(r"`([^`\s]+)`")
+PLACEHOLDER = re.compile(r"\b(NAME|FILE|DIR|PATH|MODULE|ID)\b")
+"""Upper-case words in a documented path stand for the reader's own name (``integrators/NAME.py``)."""
+FORBIDDEN = re.compile("|".join(["PHYS" + "ICS", "sha" + "red/", r"\.\./" + "seed"]))
+"""Names of files outside the repository that the project once cited (built from pieces, so this file is clean)."""
+
+
+def toml_examples(path: Path) -> list[tuple[str, str, str]]:
+    """(kind, file name, text) of every TOML block of a README: "matrix", "thresholds" or "pyproject"."""
+    examples = []
+    for number, text in enumerate(TOML_BLOCK.findall(path.read_text(encoding="utf-8")), start=1):
+        marker = EXAMPLE_NAME.search(text)
+        document = tomllib.loads(text)  # every block is valid TOML, whatever it is
+        if text.lstrip().startswith("# fragment"):  # part of a file, shown next to what completes it
+            continue
+        if marker:
+            kind, name = marker.groups()
+        elif "bound" in document:
+            kind, name = "thresholds", f"thresholds_{number}.toml"
+        elif "scenes" in document or "integrators" in document:
+            kind, name = "matrix", f"matrix_{number}.toml"
+        elif {"project", "tool", "build-system"} & set(document):
+            kind, name = "pyproject", "pyproject.toml"
+        else:
+            raise AssertionError(f"{path.relative_to(ROOT)}: TOML block {number} is neither a matrix, a thresholds file "
+                                 f"nor a pyproject.toml excerpt:\n{text}")
+        examples.append((kind, name, text))
+    return examples
+
+
+def headings(path: Path) -> set[str]:
+    """The section titles of a Markdown file, without the #s and backticks."""
+    return {line.lstrip("#").strip().replace("`", "") for line in path.read_text(encoding="utf-8").splitlines()
+            if line.startswith("#")}
+
+
+def repository_files() -> list[Path]:
+    """Every file of the repository: git's list where this is a checkout, else the files under the root."""
+    git = shutil.which("git")
+    if git and (ROOT / ".git").exists():
+        listed = subprocess.run([git, "ls-files", "-z"], cwd=ROOT, capture_output=True, check=True).stdout
+        return [ROOT / name for name in listed.decode().split("\0") if name and (ROOT / name).is_file()]
+    skip = {".git", ".venv", "results", "__pycache__", ".pytest_cache"}
+    return [path for path in ROOT.rglob("*")
+            if path.is_file() and not skip & set(path.relative_to(ROOT).parts) and not path.name.endswith(".egg-info")]
+
+
+@pytest.mark.parametrize("readme", PACKAGE_DOCS + (ROOT / "README.md",), ids=lambda path: str(path.relative_to(ROOT)))
+def test_toml_examples_load_and_cheap_gates_pass(readme: Path, tmp_path: Path, fresh_reference_cache) -> None:
+    examples = toml_examples(readme)
+    for _, name, text in examples:
+        (tmp_path / name).write_text(text, encoding="utf-8")
+    matrices = {name: load_matrix(tmp_path / name) for kind, name, _ in examples if kind == "matrix"}
+    for kind, name, _ in examples:
+        if kind != "thresholds":
+            continue
+        thresholds = load_thresholds(tmp_path / name)
+        matrix_name = thresholds.matrix_to_run()
+        assert matrix_name is not None, f"{name}: a documented thresholds file should name the matrix it checks"
+        matrix = load_matrix(matrix_name)
+        validate_against(thresholds, planned_rows(matrix), what=f"the matrix of {name}")
+        if all(scene.duration_s <= CHEAP_SCENE_S for scene in matrix.scenes):
+            status = cli_main(["check", "--thresholds", str(tmp_path / name), "--db", str(tmp_path / "gate.sqlite"),
+                               "--jobs", "1", "--no-progress"])
+            assert status == 0, f"{readme.relative_to(ROOT)}: the documented gate {name} fails on its own matrix"
+    assert all(matrix.runs for matrix in matrices.values())
+
+
+def test_the_gate_reference_has_a_runnable_example() -> None:
+    """bench/README.md documents at least one complete gate (matrix + thresholds) cheap enough to be run above."""
+    examples = toml_examples(ROOT / "bench" / "README.md")
+    kinds = [kind for kind, _, _ in examples]
+    assert kinds.count("thresholds") >= 2 and kinds.count("matrix") >= 2
+
+
+def test_relative_links_and_cited_paths_exist() -> None:
+    missing = []
+    for doc in DOCS + (ROOT / "bench" / "PERF.md",):
+        text = doc.read_text(encoding="utf-8")
+        # a recipe ("Adding a model") names the files the reader is about to create: not checked
+        text = "".join(part for part in re.split(r"(?m)^(?=#+ )", text) if not re.match(r"#+ Adding ", part))
+        for target in MARKDOWN_LINK.findall(text):
+            if re.match(r"^[a-z]+:", target) or target.startswith("#"):
+                continue
+            if not (doc.parent / target.split("#")[0]).exists():
+                missing.append(f"{doc.relative_to(ROOT)}: link {target}")
+        for span in CODE_SPAN.findall(text):
+            path = span.rstrip(".,:;")
+            if "/" not in path or not re.search(r"\.(py|toml|md|c|txt)$|/$", path) or PLACEHOLDER.search(path):
+                continue
+            bases = [base for base in (doc.parent, ROOT) if (base / path.split("/")[0]).exists()]
+            if bases and not any(list(base.glob(path.rstrip("/"))) for base in bases):
+                missing.append(f"{doc.relative_to(ROOT)}: path `{span}`")
+    assert not missing, "\n".join(missing)
+
+
+def test_every_cited_section_exists() -> None:
+    """`models/README.md "Airy precession"` and the like, anywhere in the repository (code, tests, thresholds,
+    generated text as docs/models/README.md), name a section that exists."""
+    sections = {str(doc.relative_to(ROOT)): headings(doc) for doc in PACKAGE_DOCS}
+    wrong, count = [], 0
+    for path in repository_files():
+        if path.suffix not in (".py", ".md", ".toml", ".txt", "") or path.name == "test_docs.py":
+            continue
+        text = path.read_text(encoding="utf-8", errors="replace")
+        for match in CITATION.finditer(text):
+            document = match.group(1).removeprefix("docs/")
+            section = re.sub(r"\s*\n\s*(#\s*)?", " ", match.group(2) or match.group(3)).strip().replace("`", "")
+            count += 1
+            if not any(title == section or title.startswith((f"{section} (", f"{section}: "))
+                       for title in sections[document]):
+                wrong.append(f"{path.relative_to(ROOT)}: {document} has no section {section!r}")
+    assert count > 50, f"only {count} citations found: the pattern no longer matches how the code cites"
+    assert not wrong, "\n".join(wrong)
+
+
+def test_nothing_cites_files_outside_the_repository() -> None:
+    offenders = [f"{path.relative_to(ROOT)}:{number}: {line.strip()}"
+                 for path in repository_files() if path.name != "test_docs.py"
+                 for number, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1)
+                 if FORBIDDEN.search(line)]
+    assert not offenders, "\n".join(offenders)
+
+
+def test_readme_test_command_is_what_ci_runs() -> None:
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    commands = [line for line in readme.splitlines() if "pytest" in line and line.startswith("python3 -m venv")]
+    assert len(commands) == 1, "the README shows one install-and-test command"
+    ci = [line for line in (ROOT / ".ci" / "run").read_text(encoding="utf-8").splitlines()
+          if "pytest" in line and not line.lstrip().startswith("#")]
+    assert len(ci) == 1
+    assert commands[0].endswith(ci[0].replace("--quiet ", "").strip()), (commands[0], ci[0])
+
+
+def test_results_table_in_the_docs_is_the_schema() -> None:
+    assert markdown_table() in (ROOT / "bench" / "README.md").read_text(encoding="utf-8")
+
+
+def test_generated_documents_get_the_notes_they_cite(tmp_path: Path) -> None:
+    written = copy_reference_docs(tmp_path)
+    assert [path.relative_to(tmp_path).as_posix() for path in written] == [
+        f"docs/{package}/README.md" for package in REFERENCE_DOCS]
+    for path in written:
+        source = ROOT / path.relative_to(tmp_path / "docs")
+        assert path.read_text(encoding="utf-8") == source.read_text(encoding="utf-8")
