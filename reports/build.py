@@ -25,20 +25,32 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
 import pandas as pd
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.problems.scenes import SCENES
+from foucault_bench.bench.run.store import ResultsStore
+from foucault_bench.bench.schema import COLUMN_NAMES
+from foucault_bench.bench.verdicts.pareto import (
+    DEFAULT_TARGETS,
+    cost_column,
+    pareto_front,
+)
+from foucault_bench.integrators import REGISTRY, STATUS_OK
+from foucault_bench.integrators.base import COST_COMPILED, COST_PYTHON_DRIVEN
+from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
+from foucault_bench.reports import charts, interactive, tables
+from foucault_bench.reports.document import (
+    Block,
+    Figure,
+    Heading,
+    Paragraph,
+    Table,
+    write_document,
+    write_table_files,
+)
+from foucault_bench.reports.seed import seed_blocks
+from foucault_bench.reports.studies import STUDIES, ensure_studies
 from matplotlib.figure import Figure as MplFigure
 from tqdm import tqdm
-
-from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.schema import COLUMN_NAMES
-from foucault_bench.bench.run.store import ResultsStore
-from foucault_bench.reports.studies import STUDIES, ensure_studies
-from foucault_bench.integrators import STATUS_OK
-from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
-from foucault_bench.bench.problems.scenes import SCENES
-from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS, cost_column, pareto_front
-from foucault_bench.reports import charts, interactive, tables
-from foucault_bench.reports.document import Block, Figure, Heading, Paragraph, Table, write_document, write_table_files
-from foucault_bench.reports.seed import seed_blocks
 
 if TYPE_CHECKING:
     from plotly.graph_objects import Figure as PlotlyFigure
@@ -206,6 +218,7 @@ def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
         "The precession-rate error is the integrator's own: measured rate against the reference solution's rate "
         "on the same grid. The analytic gap is the distance from the exact solution of the linear model, a model "
         "error for the other models."))
+    builder.add(Paragraph(cost_basis_sentences(runs)))
     for scene, scene_runs in runs.groupby("scene", sort=True):
         builder.add(Heading(f"Scene {scene}", level=3))
         for verdict, (title, label) in charts.VERDICT_LABELS.items():
@@ -218,6 +231,28 @@ def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
                            f"staircase: Pareto front ({len(front)} runs).",
                            lambda stem: charts.work_precision(scene_runs, verdict, front, stem),
                            lambda: interactive.work_precision(scene_runs, verdict, front))
+
+
+COST_BASIS_MEANING = {
+    COST_COMPILED: "compiled (the whole integration runs in compiled code, no Python call per step or per "
+                   "right-hand-side evaluation)",
+    COST_PYTHON_DRIVEN: "Python-driven (a Python step loop or Python callbacks drive the library, so the cost "
+                        "includes the interpreter's overhead per step or evaluation)",
+    None: "not declared by the integrator",
+}
+
+
+def cost_basis_sentences(runs: pd.DataFrame) -> str:
+    """One sentence per family saying how its integrators' cost was measured (``Integrator.cost_basis``)."""
+    sentences = []
+    for family, names in runs.groupby("family", sort=True)["integrator"]:
+        by_basis: dict[str | None, list[str]] = {}
+        for name in sorted(set(names)):
+            integrator = REGISTRY.get(name)
+            by_basis.setdefault(getattr(integrator, "cost_basis", None), []).append(name)
+        parts = [f"{', '.join(members)}: {COST_BASIS_MEANING.get(basis, basis)}" for basis, members in by_basis.items()]
+        sentences.append(f"Family {family}: " + "; ".join(parts) + ".")
+    return "How each cost was measured. " + " ".join(sentences)
 
 
 def _convergence(builder: _Builder, runs: pd.DataFrame) -> None:
