@@ -33,7 +33,8 @@ import pandas as pd
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.scenes import SCENES, Scene, scene_from_mapping
-from foucault_bench.bench.run.store import ResultsStore, setting_label
+from foucault_bench.bench.run.store import ResultsStore
+from foucault_bench.bench.schema import setting_label
 from foucault_bench.bench.verdicts.pareto import ERROR_METRICS, cheapest_meeting, cost_column, usable_runs
 
 MAX_ROUNDS = 4
@@ -264,7 +265,7 @@ def advise(store: ResultsStore, scene: Scene, target: Target, *, search_jobs: in
         best = _run_record(runs.loc[usable["error"].idxmin()], target.metric, cost)
     notes = []
     if not runs.empty:
-        from foucault_bench.bench.run.matrix import code_version
+        from foucault_bench.bench.run.provenance import code_version
 
         stale = runs["code_version"].notna() & (runs["code_version"] != code_version())
         if stale.any():

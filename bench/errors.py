@@ -1,4 +1,4 @@
-"""Errors the command line reports without a traceback (exit status 2)."""
+"""Errors the command line reports without a traceback (exit status 2), and the check for optional extras."""
 
 from __future__ import annotations
 
@@ -9,3 +9,18 @@ class InputError(Exception):
     def __init__(self, problems: list[str] | str):
         self.problems = [problems] if isinstance(problems, str) else list(problems)
         super().__init__("\n".join(self.problems))
+
+
+class RunInterrupted(Exception):
+    """A matrix run stopped for a reason outside any run (its Dask cluster went away): the matrix run is stored
+    as ``interrupted``, the message says why, and ``--resume`` completes it. Exit status 75 (EX_TEMPFAIL,
+    sysexits.h: a temporary failure, try again)."""
+
+    exit_status = 75
+def require_extra(module: str, extra: str, feature: str) -> None:
+    """Raise ``InputError`` naming the package extra that provides ``module`` when it is not installed, e.g.
+    ``--scheduler needs the 'dask' extra: pip install 'foucault-bench[dask]'``."""
+    import importlib.util
+
+    if importlib.util.find_spec(module) is None:
+        raise InputError(f"{feature} needs the {extra!r} extra: pip install 'foucault-bench[{extra}]'")

@@ -4,11 +4,21 @@ This is the contract between the runner (which writes rows), the results store (
 threshold checks. Every column is documented here once; the column table of bench/README.md "Results table" is
 generated from ``COLUMNS`` (``python -m foucault_bench.bench.schema``; ``tests/test_docs.py`` keeps them equal).
 Errors are dimensionless unless a unit is given.
+
+Each row also carries the integrator's declared facts (``DECLARED_FACTS``: family, order, stages, adaptive,
+stability limit) as they were when the run was made, so that reading results never needs the integrator's
+code (a plug-in need not be installed to report on its runs).
+
+``SCHEMA_VERSION`` numbers this contract; the results store records it in the database and migrates or refuses
+a database written under another version (``bench.run.store``). Bump it when a column is added, removed or
+changes meaning, and say in ``MIGRATIONS`` what an older database lacks.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -27,14 +37,18 @@ COLUMNS: tuple[Column, ...] = (
     Column("model", "TEXT", "", "model name (linear, seed_planar, spherical)"),
     Column("integrator", "TEXT", "", "integrator name (registry key)"),
     Column("family", "TEXT", "", "integrator family (colours, thresholds)"),
+    Column("declared_order", "INTEGER", "", "order of accuracy the integrator declares (NULL where it varies)"),
+    Column("stages", "INTEGER", "", "declared right-hand-side evaluations per step (NULL for adaptive ones)"),
+    Column("adaptive", "INTEGER", "", "1 if the integrator is driven by a tolerance, 0 if by a step size"),
+    Column("stability_limit_kh", "REAL", "", "declared largest stable k·h on ẍ = −k²x (NULL if none)"),
     Column("step_s", "REAL", "s", "effective fixed step (NULL for adaptive runs)"),
     Column("kh", "REAL", "", "k·h, the step in units of 1/k = √(L/g) (NULL for adaptive runs)"),
     Column("tol", "REAL", "", "tolerance (NULL for fixed-step runs)"),
     Column("duration_s", "REAL", "s", "integrated time span"),
     Column("n_out", "INTEGER", "", "points on the output grid (the same for every integrator of a scene)"),
     # outcome
-    Column("status", "TEXT", "", "ok / diverged / failed"),
-    Column("message", "TEXT", "", "why a run diverged or failed (empty when ok)"),
+    Column("status", "TEXT", "", "ok / diverged / failed / timeout (see RUN_STATUSES)"),
+    Column("message", "TEXT", "", "why a run diverged, failed or timed out (empty when ok)"),
     # verdicts
     Column("energy_conserved", "INTEGER", "", "1 if the model conserves its energy (Jacobi) exactly, else 0"),
     Column("energy_max_rel_error", "REAL", "", "max over the output grid of |E − E₀|/(E₀ − E_rest), E_rest = energy of the bob at rest at the bottom"),
@@ -51,18 +65,25 @@ COLUMNS: tuple[Column, ...] = (
     Column("analytic_gap_seed", "REAL", "", "max |r − r_seed eqs. 14-15| / A over the output grid"),
     Column("reference_error", "REAL", "", "max |r − r_reference| / A over the output grid (real128 heyoka reference)"),
     # cost
-    Column("wall_time_s", "REAL", "s", "median wall time of the timed repeats (compile excluded)"),
-    Column("wall_time_spread_s", "REAL", "s", "max − min of the timed repeats"),
+    Column("cpu_time_s", "REAL", "s", "median CPU time of the worker thread over the timed repeats (compile excluded): the cost the charts and tables use, independent of machine load and --jobs"),
+    Column("cpu_time_spread_s", "REAL", "s", "max − min of the timed repeats' CPU times (0 with a single repeat, made for runs over 1 s)"),
+    Column("wall_time_s", "REAL", "s", "median wall time of the timed repeats (compile excluded): what a user waits, grows when runs share a core"),
+    Column("wall_time_spread_s", "REAL", "s", "max − min of the timed repeats' wall times"),
     Column("repeats", "INTEGER", "", "timed repeats after the warm-up"),
-    Column("compile_time_s", "REAL", "s", "first-call time minus median run time (JIT compile or cache load)"),
-    Column("nfev", "INTEGER", "", "right-hand-side evaluations (Taylor steps for heyoka)"),
+    Column("compile_time_s", "REAL", "s", "first-call wall time minus the median wall time (JIT compile or cache load)"),
+    Column("nfev", "INTEGER", "", "right-hand-side evaluations (for heyoka: Taylor steps, each an order-p expansion, not comparable)"),
     Column("njev", "INTEGER", "", "Jacobian evaluations where reported"),
-    Column("steps", "INTEGER", "", "accepted steps"),
+    Column("steps", "INTEGER", "", "accepted steps (the charts' second cost axis, counted for every family; one step = s RHS evaluations for Runge-Kutta, one order-p Taylor expansion for heyoka)"),
     Column("rejected_steps", "INTEGER", "", "rejected steps where the library reports them"),
     Column("peak_rss_mb", "REAL", "MB", "peak resident memory of the worker after the run"),
 )
 
 COLUMN_NAMES: tuple[str, ...] = tuple(column.name for column in COLUMNS)
+STATUS_TIMEOUT = "timeout"
+RUN_STATUSES: tuple[str, ...] = ("ok", "diverged", "failed", STATUS_TIMEOUT)
+"""Every value of the ``status`` column: ok; diverged (the state became non-finite; verdicts up to the
+divergence); failed (an error, with the reason in ``message``); timeout (stopped at the per-run time limit,
+``run_timeout_s``, given in ``message``)."""
 VERDICT_COLUMNS: tuple[str, ...] = (
     "energy_max_rel_error",
     "energy_drift_per_s",
@@ -78,6 +99,44 @@ VERDICT_COLUMNS: tuple[str, ...] = (
     "reference_error",
 )
 """Accuracy columns: deterministic, identical bit for bit for the same matrix on the same machine."""
+
+DECLARED_FACTS: dict[str, str] = {
+    "family": "family",
+    "declared_order": "order",
+    "stages": "stages",
+    "adaptive": "adaptive",
+    "stability_limit_kh": "stability_limit_kh",
+}
+"""Results column → the ``integrators.Integrator`` class attribute it stores."""
+
+SCHEMA_VERSION = 2
+"""Version of ``COLUMNS`` (stored as the database's ``PRAGMA user_version``)."""
+MIGRATIONS: dict[int, str] = {
+    1: "runs lack the declared integrator facts (declared_order, stages, adaptive, stability_limit_kh) and the "
+       "precession errors in rad/s and relative to Ω_E (precession_rate_error_rad_s, _earth, "
+       "precession_rate_ref_error_rad_s, _earth): added as NULL columns, unknown for the old rows",
+}
+"""Older schema version → what a database written under it lacks (the store adds the missing columns)."""
+
+
+def declared_facts(integrator: Any) -> dict[str, Any]:
+    """The integrator's declared facts as results-column values (``DECLARED_FACTS``; a bool as 0/1)."""
+    facts = {column: getattr(integrator, attribute, None) for column, attribute in DECLARED_FACTS.items()}
+    facts["adaptive"] = None if facts["adaptive"] is None else int(bool(facts["adaptive"]))
+    return facts
+
+
+def setting_label(kh: float | None, tol: float | None) -> str:
+    """``tol=1e-08`` for an adaptive run, ``kh=0.125`` for a fixed-step one (missing values are None or NaN)."""
+    return f"tol={tol:g}" if is_present(tol) else f"kh={kh:.4g}"
+
+
+def is_present(value: Any) -> bool:
+    """Not None, not NaN (pandas' NA reads as missing too)."""
+    try:
+        return value is not None and not math.isnan(value)
+    except TypeError:
+        return False
 
 
 def markdown_table() -> str:

@@ -71,8 +71,9 @@ def absolute_tolerance(params: PendulumParameters, tol: float) -> np.ndarray:
 
 
 def heyoka_tolerance(params: PendulumParameters, tol: float) -> float:
-    """heyoka's single ε = tol × min(1, max_i scale_i) (see module docstring)."""
-    return tol * min(1.0, float(np.max(state_scale(params))))
+    """heyoka's single ε = tol × min(1, max_i scale_i) (see module docstring); max_i scale_i = max(R, kR)."""
+    radius = release_scale_m(params)
+    return tol * min(1.0, max(radius, params.pendulum_frequency_rad_s * radius))
 
 
 def step_budget(params: PendulumParameters, span_s: float) -> int:

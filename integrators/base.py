@@ -22,7 +22,8 @@ The framework then
 * turns every exception into a ``failed`` solution with the exception's message, and every non-finite
   state into a ``diverged`` one, so that no run crashes a benchmark matrix,
 * fills ``nfev`` from ``stages × steps`` where the integrator does not count evaluations itself,
-* silences the C libraries' chatter on stdout/stderr (SUNDIALS prints its warnings there).
+* silences the C libraries' chatter on stdout/stderr (SUNDIALS prints its warnings there;
+  ``silence_native_output``).
 
 The base class follows SciPy's ``scipy/integrate/_ivp/base.py`` (``OdeSolver``): a few declared attributes,
 one method to implement, the rest done once by the framework.
@@ -35,6 +36,7 @@ import functools
 import math
 import os
 import sys
+import threading
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import ClassVar, Iterator, TextIO
@@ -46,6 +48,11 @@ from foucault_bench.models import Model, PendulumParameters
 STATUS_OK = "ok"
 STATUS_DIVERGED = "diverged"
 STATUS_FAILED = "failed"
+
+COST_COMPILED = "compiled"
+COST_PYTHON_DRIVEN = "python-driven"
+COST_BASES = (COST_COMPILED, COST_PYTHON_DRIVEN)
+"""Values of ``Integrator.cost_basis``: how the timed call's cost arises (see there)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -143,6 +150,18 @@ class Integrator(ABC):
         conserves_quadratic_invariants: every quadratic invariant of the system is an exact invariant of the
             one-step map (symplectic Runge–Kutta methods; Hairer, Lubich & Wanner, Thm. IV.2.2), e.g. the linear
             model's energy, kept to round-off.
+        cost_basis: how the measured cost arises: ``"compiled"`` when the whole integration runs in compiled
+            code (no Python call per step or per right-hand-side evaluation), ``"python-driven"`` when a Python
+            loop or Python callbacks drive the library (the cost then includes the interpreter's overhead per
+            step or evaluation); ``None`` where an integrator does not declare it. The report says it per
+            integrator next to the cost charts.
+        streams_step_metrics: ``True`` if ``solve(monitor=True)`` streams verdict ingredients that the output
+            grid cannot give (``StreamedMetrics.energy_max_rel_error`` over every step). The runner times
+            ``monitor=False`` calls for every integrator, so that the timed work is the same for all (integrate
+            to the output grid), and makes one extra untimed ``monitor=True`` call only where this is ``True``.
+        silence_native_output: ``solve`` redirects the process's stdout and stderr while the integrator runs
+            (``quiet_native_output``: a few µs per call), for libraries that print (SUNDIALS); ``False`` for
+            one that reports only through return values.
         reference: where the method is described (book section or paper).
 
     ``rotation_growth_per_step`` says what rotation does to a method whose ``stability_limit_kh`` holds only
@@ -159,6 +178,9 @@ class Integrator(ABC):
     volume_preserving: ClassVar[bool] = False
     conserves_quadratic_invariants: ClassVar[bool] = False
     reference: ClassVar[str]
+    cost_basis: ClassVar[str | None] = None
+    streams_step_metrics: ClassVar[bool] = False
+    silence_native_output: ClassVar[bool] = True
 
     def rotation_growth_per_step(self, kh: float, rate_ratio: float) -> float | None:
         """Per-step growth factor |λ|max of the amplitude on the linear model turning at the vertical rate
@@ -179,7 +201,7 @@ class Integrator(ABC):
         self.validate_setting(step_s=step_s, tol=tol)
         self.validate_problem(problem, step_s=step_s)
         try:
-            with quiet_native_output():
+            with quiet_native_output() if self.silence_native_output else contextlib.nullcontext():
                 solution = self._solve(problem, step_s=step_s, tol=tol, monitor=monitor)
         except Exception as exc:  # any library or numerical failure becomes a row, not a crash
             return Solution.failure(problem.t_out, f"{type(exc).__name__}: {exc}")
@@ -226,7 +248,13 @@ class Integrator(ABC):
             "conserves_quadratic_invariants": self.conserves_quadratic_invariants,
             "unstable_with_rotation": self.rotation_growth_per_step(1.0, 1e-4) is not None,
             "reference": self.reference,
+            "cost_basis": self.cost_basis,
         }
+
+
+_quiet_lock = threading.Lock()
+_quiet_users = 0
+_quiet_saved: list = []  # the Python streams and (fd, saved copy) pairs, restored by the last thread out
 
 
 @contextlib.contextmanager
@@ -235,28 +263,41 @@ def quiet_native_output() -> Iterator[None]:
     code or by a binding's Python error handler) do not write over the terminal or a progress bar: the
     process's stdout and stderr file descriptors (1 and 2, where C code writes whatever ``sys.stdout`` is) go
     to /dev/null, and so do ``sys.stdout`` and ``sys.stderr``. Python-level writes are flushed first; the
-    descriptors are left alone when they are not open."""
-    for stream in {sys.stdout, sys.stderr, sys.__stdout__, sys.__stderr__}:
-        if stream is not None:
-            stream.flush()
-    sink = _devnull()
-    with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
-        fds = (1, 2)
-        try:
-            for fd in fds:
-                os.fstat(fd)
-        except OSError:
-            yield
-            return
-        saved = [os.dup(fd) for fd in fds]
-        try:
-            for fd in fds:
+    descriptors are left alone when they are not open.
+
+    Thread-safe: the descriptors and ``sys.stdout`` belong to the process, so when several threads solve at
+    once (a Dask worker running tasks in threads) the first one in redirects them and the last one out
+    restores them."""
+    global _quiet_users
+    with _quiet_lock:
+        if _quiet_users == 0:
+            for stream in {sys.stdout, sys.stderr, sys.__stdout__, sys.__stderr__}:
+                if stream is not None:
+                    stream.flush()
+            sink = _devnull()
+            streams = (sys.stdout, sys.stderr)
+            sys.stdout = sys.stderr = sink
+            try:
+                for fd in (1, 2):
+                    os.fstat(fd)
+                descriptors = [(fd, os.dup(fd)) for fd in (1, 2)]
+            except OSError:  # descriptors not open: only the Python streams are redirected
+                descriptors = []
+            for fd, _ in descriptors:
                 os.dup2(sink.fileno(), fd)
-            yield
-        finally:
-            for fd, copy in zip(fds, saved):
-                os.dup2(copy, fd)
-                os.close(copy)
+            _quiet_saved[:] = [streams, descriptors]
+        _quiet_users += 1
+    try:
+        yield
+    finally:
+        with _quiet_lock:
+            _quiet_users -= 1
+            if _quiet_users == 0:
+                (sys.stdout, sys.stderr), descriptors = _quiet_saved
+                for fd, saved in descriptors:
+                    os.dup2(saved, fd)
+                    os.close(saved)
+                _quiet_saved.clear()
 
 
 @functools.cache

@@ -23,7 +23,7 @@ from typing import Callable, ClassVar
 import numpy as np
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
-from foucault_bench.integrators.base import STATUS_DIVERGED, Integrator, Problem, Solution, StreamedMetrics
+from foucault_bench.integrators.base import COST_COMPILED, STATUS_DIVERGED, Integrator, Problem, Solution, StreamedMetrics
 from foucault_bench.models import Model, PendulumParameters
 from foucault_bench.models.jit import jit
 from foucault_bench.models.parameters import PARAMETER_COUNT
@@ -68,6 +68,7 @@ def build_kernel(step: Callable, energy: Callable) -> Callable:
 
     @jit
     def kernel(state0, parameter_vector, h, n_steps, stride, out, monitor, turning, radius_bound):
+        # n_steps: a multiple of stride (out has n_steps // stride + 1 rows)
         # The parameters as a tuple of scalars: unlike array elements they cannot alias the output arrays
         # written in the loop, so LLVM hoists what the step computes from p and h alone out of the loop.
         p = to_fixed_tuple(parameter_vector, PARAMETER_COUNT)
@@ -96,42 +97,44 @@ def build_kernel(step: Callable, energy: Callable) -> Callable:
         bound2 = radius_bound * radius_bound
         status = 0
         steps_done = 0
-        for i in range(1, n_steps + 1):
-            xn, yn, vxn, vyn = step(x, y, vx, vy, h, p)
-            r2 = xn * xn + yn * yn
-            if not (r2 <= bound2) or not (abs(vxn) + abs(vyn) < 1.0e300):
-                status = 1
+        # one output row per ``stride`` steps: two nested loops, no modulo per step (as a C programmer writes it)
+        for row in range(1, n_steps // stride + 1):
+            for _ in range(stride):
+                xn, yn, vxn, vyn = step(x, y, vx, vy, h, p)
+                r2 = xn * xn + yn * yn
+                if not (r2 <= bound2) or not (abs(vxn) + abs(vyn) < 1.0e300):
+                    status = 1
+                    break
+                steps_done += 1
+                if monitor:
+                    t = steps_done * h
+                    rel = (energy(xn, yn, vxn, vyn, p) - energy0) / energy_scale
+                    if abs(rel) > max_rel:
+                        max_rel = abs(rel)
+                    count += 1.0
+                    dt = t - mean_t
+                    mean_t += dt / count
+                    mean_e += (rel - mean_e) / count
+                    co_te += dt * (rel - mean_e)
+                    var_t += dt * (t - mean_t)
+                    radial_new = xn * vxn + yn * vyn
+                    if radial > 0.0 and radial_new <= 0.0 and n_turning < turning.shape[0]:
+                        theta, tx, ty = _turning_point(x, y, vx, vy, xn, yn, vxn, vyn, h, radial, radial_new)
+                        turning[n_turning, 0] = (steps_done - 1 + theta) * h
+                        turning[n_turning, 1] = tx
+                        turning[n_turning, 2] = ty
+                        n_turning += 1
+                    radial = radial_new
+                x = xn
+                y = yn
+                vx = vxn
+                vy = vyn
+            if status:
                 break
-            steps_done = i
-            if monitor:
-                t = i * h
-                rel = (energy(xn, yn, vxn, vyn, p) - energy0) / energy_scale
-                if abs(rel) > max_rel:
-                    max_rel = abs(rel)
-                count += 1.0
-                dt = t - mean_t
-                mean_t += dt / count
-                mean_e += (rel - mean_e) / count
-                co_te += dt * (rel - mean_e)
-                var_t += dt * (t - mean_t)
-                radial_new = xn * vxn + yn * vyn
-                if radial > 0.0 and radial_new <= 0.0 and n_turning < turning.shape[0]:
-                    theta, tx, ty = _turning_point(x, y, vx, vy, xn, yn, vxn, vyn, h, radial, radial_new)
-                    turning[n_turning, 0] = (i - 1 + theta) * h
-                    turning[n_turning, 1] = tx
-                    turning[n_turning, 2] = ty
-                    n_turning += 1
-                radial = radial_new
-            x = xn
-            y = yn
-            vx = vxn
-            vy = vyn
-            if i % stride == 0:
-                row = i // stride
-                out[row, 0] = x
-                out[row, 1] = y
-                out[row, 2] = vx
-                out[row, 3] = vy
+            out[row, 0] = x
+            out[row, 1] = y
+            out[row, 2] = vx
+            out[row, 3] = vy
         slope = co_te / var_t if var_t > 0.0 else 0.0
         return status, steps_done, n_turning, max_rel, slope
 
@@ -155,6 +158,8 @@ class FixedStepIntegrator(Integrator):
     """Base of the compiled fixed-step schemes: a subclass only builds its numba step function."""
 
     adaptive: ClassVar[bool] = False
+    cost_basis: ClassVar[str] = COST_COMPILED
+    streams_step_metrics: ClassVar[bool] = True  # the per-step energy error, which the grid cannot give
 
     @abstractmethod
     def make_step(self, model: Model) -> Callable:

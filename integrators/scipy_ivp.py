@@ -10,9 +10,11 @@ facts. Configuration (SciPy reference guide, ``scipy.integrate.solve_ivp``):
 * **Right-hand side.** ``Model.numba_rhs`` (t, y, p) with ``args=(p,)``; LSODA, which switches to BDF when it
   detects stiffness, also gets ``Model.jacobian`` (heyoka's symbolic derivative of the model's source).
 * **Output.** ``t_eval`` = the output grid (each method's dense output; the steps are not changed by it).
-* **Turning points.** ``events`` on r·ṙ = xẋ + yẏ with ``direction = −1`` (radius maxima); scipy reports
-  the release point t = 0 as a root for a release from rest, which ``integrators.adaptive.turning_points``
-  drops.
+* **Turning points.** With ``monitor=True`` (the default of ``solve``), ``events`` on r·ṙ = xẋ + yẏ with
+  ``direction = −1`` (radius maxima); scipy reports the release point t = 0 as a root for a release from rest,
+  which ``integrators.adaptive.turning_points`` drops. The benchmark runner times ``monitor=False`` (no event
+  function: the same work as every other integrator; the verdicts take the turning points from the output
+  grid, ``bench.verdicts.turning_points``).
 * **Counters.** ``nfev``, ``njev`` from the result; ``steps`` = accepted steps, counted by a subclass of the
   method's ``OdeSolver`` (``solve_ivp`` accepts a solver class as ``method``) whose ``step`` counts successful
   calls; ``rejected_steps`` is ``None`` (scipy does not report it).
@@ -33,7 +35,7 @@ import numpy as np
 from scipy.integrate import DOP853, LSODA, RK45, OdeSolver, solve_ivp
 
 from foucault_bench.integrators.adaptive import AdaptiveIntegrator, absolute_tolerance, step_budget, turning_points
-from foucault_bench.integrators.base import STATUS_FAILED, Problem, Solution, StreamedMetrics
+from foucault_bench.integrators.base import COST_PYTHON_DRIVEN, STATUS_FAILED, Problem, Solution, StreamedMetrics
 from foucault_bench.integrators.registry import register
 
 SCIPY_MIN_RTOL = 100.0 * np.finfo(np.float64).eps
@@ -92,6 +94,7 @@ class ScipyIvpIntegrator(AdaptiveIntegrator):
 
     solver_class: ClassVar[type[OdeSolver]]
     uses_jacobian: ClassVar[bool] = False
+    cost_basis: ClassVar[str] = COST_PYTHON_DRIVEN  # solve_ivp's Python step loop, a Python call per evaluation
 
     def __init__(self, max_steps: int | None = None) -> None:
         if max_steps is not None and max_steps < 1:

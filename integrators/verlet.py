@@ -102,8 +102,8 @@ def _plane_step(kick: Callable, remainder: Callable, hamiltonian: bool) -> Calla
 
 
 def _sphere_step(kick: Callable) -> Callable:
-    # Inlined into the fixed-step loop (too large for LLVM's own inliner), so that the four rotations' axis,
-    # cosine and sine, which depend only on p and h, are computed once per run instead of once per call.
+    # Inlined into the fixed-step loop (too large for LLVM's own inliner), so that the rotation matrix, which
+    # depends only on p and h, is computed once per run (hoisted out of the loop) instead of once per call.
     @jit(inline="always")
     def step(x, y, vx, vy, h, p):
         wx = p[P_OMEGA_X]
@@ -111,14 +111,15 @@ def _sphere_step(kick: Callable) -> Callable:
         wz = p[P_OMEGA_Z]
         length = p[P_LENGTH]
         l2 = length * length
-        z = -(l2 - x * x - y * y) ** 0.5
+        rotation = _half_step_rotation(wx, wy, wz, h)
+        z = -math.sqrt(l2 - x * x - y * y)
         vz = -(x * vx + y * vy) / z
         # canonical momentum p = v + ω×r
         px = vx + wy * z - wz * y
         py = vy + wz * x - wx * z
         pz = vz + wx * y - wy * x
-        x, y, z = _rotate(x, y, z, wx, wy, wz, h)
-        px, py, pz = _rotate(px, py, pz, wx, wy, wz, h)
+        x, y, z = _rotate(rotation, x, y, z)
+        px, py, pz = _rotate(rotation, px, py, pz)
         # RATTLE on ½|p|² + U(r), |r| = L
         fx, fy, fz = kick(x, y, z, p)
         qx = x + h * (px + 0.5 * h * fx)
@@ -126,7 +127,7 @@ def _sphere_step(kick: Callable) -> Callable:
         qz = z + h * (pz + 0.5 * h * fz)
         qr = qx * x + qy * y + qz * z
         excess = qx * qx + qy * qy + qz * qz - l2
-        c = -excess / (qr + (qr * qr - l2 * excess) ** 0.5)  # root of |q + c r|² = L² nearest 0
+        c = -excess / (qr + math.sqrt(qr * qr - l2 * excess))  # root of |q + c r|² = L² nearest 0
         xn = qx + c * x
         yn = qy + c * y
         zn = qz + c * z
@@ -141,31 +142,41 @@ def _sphere_step(kick: Callable) -> Callable:
         px += nu * xn
         py += nu * yn
         pz += nu * zn
-        xn, yn, zn = _rotate(xn, yn, zn, wx, wy, wz, h)
-        px, py, pz = _rotate(px, py, pz, wx, wy, wz, h)
+        xn, yn, zn = _rotate(rotation, xn, yn, zn)
+        px, py, pz = _rotate(rotation, px, py, pz)
         return xn, yn, px - (wy * zn - wz * yn), py - (wz * xn - wx * zn)
 
     return step
 
 
 @jit
-def _rotate(vx, vy, vz, wx, wy, wz, h):
-    """Rotate (vx, vy, vz) about ω = (wx, wy, wz) by the angle −|ω| h/2 (Rodrigues' rotation formula)."""
-    rate = (wx * wx + wy * wy + wz * wz) ** 0.5
+def _half_step_rotation(wx, wy, wz, h):
+    """The rotation about ω = (wx, wy, wz) by the angle −|ω| h/2 as a 3×3 matrix (row-major 9-tuple):
+    R = cos a·I + sin a·[n]× + (1 − cos a)·n nᵀ, n = ω/|ω| (Rodrigues' rotation formula in matrix form,
+    e.g. Goldstein, Classical Mechanics, 3rd ed., §4.7); the identity when ω = 0. Computed once per run,
+    R applies in 9 multiplications and 6 additions instead of Rodrigues' vector form's 18 and 12."""
+    rate = math.sqrt(wx * wx + wy * wy + wz * wz)
     if rate == 0.0:
-        return vx, vy, vz
+        return 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
     nx = wx / rate
     ny = wy / rate
     nz = wz / rate
     angle = -0.5 * rate * h
     cos_a = math.cos(angle)
     sin_a = math.sin(angle)
-    dot = nx * vx + ny * vy + nz * vz
-    cx = ny * vz - nz * vy
-    cy = nz * vx - nx * vz
-    cz = nx * vy - ny * vx
+    u = 1.0 - cos_a
     return (
-        vx * cos_a + cx * sin_a + nx * dot * (1.0 - cos_a),
-        vy * cos_a + cy * sin_a + ny * dot * (1.0 - cos_a),
-        vz * cos_a + cz * sin_a + nz * dot * (1.0 - cos_a),
+        cos_a + u * nx * nx, u * nx * ny - sin_a * nz, u * nx * nz + sin_a * ny,
+        u * ny * nx + sin_a * nz, cos_a + u * ny * ny, u * ny * nz - sin_a * nx,
+        u * nz * nx - sin_a * ny, u * nz * ny + sin_a * nx, cos_a + u * nz * nz,
+    )
+
+
+@jit
+def _rotate(rotation, vx, vy, vz):
+    """R·(vx, vy, vz) for a row-major 3×3 matrix R (``_half_step_rotation``)."""
+    return (
+        rotation[0] * vx + rotation[1] * vy + rotation[2] * vz,
+        rotation[3] * vx + rotation[4] * vy + rotation[5] * vz,
+        rotation[6] * vx + rotation[7] * vy + rotation[8] * vz,
     )

@@ -19,33 +19,42 @@ small fixture without a database.
 
 from __future__ import annotations
 
-import argparse
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
 import pandas as pd
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.problems.scenes import SCENES
+from foucault_bench.bench.run.store import ResultsStore
+from foucault_bench.bench.schema import COLUMN_NAMES
+from foucault_bench.bench.verdicts.pareto import (
+    DEFAULT_TARGETS,
+    cost_column,
+    pareto_front,
+)
+from foucault_bench.integrators import REGISTRY, STATUS_OK
+from foucault_bench.integrators.base import COST_COMPILED, COST_PYTHON_DRIVEN
+from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
+from foucault_bench.reports import charts, interactive, tables
+from foucault_bench.reports.document import (
+    Block,
+    Figure,
+    Heading,
+    Paragraph,
+    Table,
+    write_document,
+    write_table_files,
+)
+from foucault_bench.reports.seed import seed_blocks
+from foucault_bench.reports.studies import STUDIES, ensure_studies
 from matplotlib.figure import Figure as MplFigure
 from tqdm import tqdm
-
-from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.schema import COLUMN_NAMES
-from foucault_bench.bench.run.store import DEFAULT_DB, ResultsStore
-from foucault_bench.reports.studies import STUDIES, ensure_studies
-from foucault_bench.integrators import STATUS_OK
-from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
-from foucault_bench.bench.problems.scenes import SCENES
-from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS, cost_column, pareto_front
-from foucault_bench.reports import charts, interactive, tables
-from foucault_bench.reports.document import Block, Figure, Heading, Paragraph, Table, write_document, write_table_files
-from foucault_bench.reports.seed import seed_blocks
 
 if TYPE_CHECKING:
     from plotly.graph_objects import Figure as PlotlyFigure
 
-DEFAULT_OUT = Path("results") / "report"
 FIGURES = "figures"
 TABLES = "tables"
 
@@ -221,6 +230,7 @@ def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
         "The precession-rate error is the integrator's own: measured rate against the reference solution's rate "
         "on the same grid. The analytic gap is the distance from the exact solution of the linear model, a model "
         "error for the other models."))
+    builder.add(Paragraph(cost_basis_sentences(runs)))
     for scene, scene_runs in runs.groupby("scene", sort=True):
         builder.add(Heading(f"Scene {scene}", level=3))
         for verdict, (title, label) in charts.VERDICT_LABELS.items():
@@ -233,6 +243,28 @@ def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
                            f"staircase: Pareto front ({len(front)} runs).",
                            lambda stem: charts.work_precision(scene_runs, verdict, front, stem),
                            lambda: interactive.work_precision(scene_runs, verdict, front))
+
+
+COST_BASIS_MEANING = {
+    COST_COMPILED: "compiled (the whole integration runs in compiled code, no Python call per step or per "
+                   "right-hand-side evaluation)",
+    COST_PYTHON_DRIVEN: "Python-driven (a Python step loop or Python callbacks drive the library, so the cost "
+                        "includes the interpreter's overhead per step or evaluation)",
+    None: "not declared by the integrator",
+}
+
+
+def cost_basis_sentences(runs: pd.DataFrame) -> str:
+    """One sentence per family saying how its integrators' cost was measured (``Integrator.cost_basis``)."""
+    sentences = []
+    for family, names in runs.groupby("family", sort=True)["integrator"]:
+        by_basis: dict[str | None, list[str]] = {}
+        for name in sorted(set(names)):
+            integrator = REGISTRY.get(name)
+            by_basis.setdefault(getattr(integrator, "cost_basis", None), []).append(name)
+        parts = [f"{', '.join(members)}: {COST_BASIS_MEANING.get(basis, basis)}" for basis, members in by_basis.items()]
+        sentences.append(f"Family {family}: " + "; ".join(parts) + ".")
+    return "How each cost was measured. " + " ".join(sentences)
 
 
 def _convergence(builder: _Builder, runs: pd.DataFrame) -> None:
@@ -386,20 +418,8 @@ def build_report(inputs: ReportInputs, folder: Path, title: str = "foucault-benc
 
 
 # --------------------------------------------------------------------------------------------------------------
-# command line
+# the command (its options: bench.commands.report)
 # --------------------------------------------------------------------------------------------------------------
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--db", type=Path, default=DEFAULT_DB, help=f"results database (default {DEFAULT_DB})")
-    parser.add_argument("--matrix-id", default=None, help="matrix run id or unique prefix (default: the latest)")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"report folder (default {DEFAULT_OUT})")
-    parser.add_argument("--studies", choices=("stored", "recompute", "skip"), default="stored",
-                        help="study tables: read from the database and compute missing ones (stored, default), "
-                             "recompute all, or leave the study sections out (skip)")
-    parser.add_argument("--targets", type=float, nargs="+", default=list(DEFAULT_TARGETS), metavar="ERROR",
-                        help="target reference errors of the matched-accuracy summary (default: "
-                             f"{' '.join(f'{t:g}' for t in DEFAULT_TARGETS)})")
-
-
 def _provenance(store: ResultsStore, matrix_id: str) -> dict[str, str]:
     runs = store.matrix_runs()
     row = runs[runs["matrix_id"] == matrix_id]
@@ -412,27 +432,24 @@ def _provenance(store: ResultsStore, matrix_id: str) -> dict[str, str]:
     return {label: str(record[key]) for key, label in labels.items() if key in record and pd.notna(record[key])}
 
 
-def main(args: argparse.Namespace) -> int:
+def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "stored",
+                 targets: tuple[float, ...] = DEFAULT_TARGETS) -> int:
+    """``foucault-bench report``: the report of matrix run ``matrix_id`` (``None``: the latest) of database
+    ``db`` written to folder ``out``; ``studies`` is ``stored``, ``recompute`` or ``skip``. Exit status 0."""
     started = time.perf_counter()
-    problems = [f"--targets: a target error must be a finite number > 0, got {target:g}"
-                for target in args.targets if not (math.isfinite(target) and target > 0)]
-    if args.out.exists() and not args.out.is_dir():
-        problems.append(f"--out {args.out} exists and is not a folder")
-    if problems:
-        raise InputError(problems)
-    with ResultsStore(args.db, create=False) as store:
-        matrix_id = store.resolve_matrix_id(args.matrix_id)
+    with ResultsStore(db, create=False) as store:
+        matrix_id = store.resolve_matrix_id(matrix_id)
         runs = store.frame(matrix_id)
         if runs.empty:
-            raise InputError(f"matrix run {matrix_id} in {args.db} has no stored runs")
-        studies = {} if args.studies == "skip" else ensure_studies(store, recompute=args.studies == "recompute")
-        inputs = ReportInputs(runs=runs, studies=studies, adequacy=store.adequacy(matrix_id),
-                              provenance={"database": str(args.db), **_provenance(store, matrix_id)},
-                              targets=tuple(args.targets))
-    html_path, markdown_path = build_report(inputs, args.out, progress=True)
+            raise InputError(f"matrix run {matrix_id} in {db} has no stored runs")
+        study_tables = {} if studies == "skip" else ensure_studies(store, recompute=studies == "recompute")
+        inputs = ReportInputs(runs=runs, studies=study_tables, adequacy=store.adequacy(matrix_id),
+                              provenance={"database": str(db), **_provenance(store, matrix_id)},
+                              targets=targets)
+    html_path, markdown_path = build_report(inputs, out, progress=True)
     print(f"report written: {html_path} and {markdown_path} ({len(runs)} runs, "
-          f"{', '.join(STUDIES) if studies else 'no studies'}; {time.perf_counter() - started:.1f} s)")
+          f"{', '.join(STUDIES) if study_tables else 'no studies'}; {time.perf_counter() - started:.1f} s)")
     return 0
 
 
-__all__ = ["ReportInputs", "add_arguments", "build_report", "main"]
+__all__ = ["ReportInputs", "build_report", "write_report"]

@@ -31,7 +31,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from foucault_bench.bench.run.store import setting_label
+from foucault_bench.bench.schema import setting_label
 from foucault_bench.bench.verdicts.pareto import cost_column
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
 from foucault_bench.integrators.registry import REGISTRY

@@ -23,7 +23,7 @@ from matplotlib.figure import Figure as MplFigure
 from matplotlib.ticker import FixedFormatter
 from plotly.subplots import make_subplots
 
-from foucault_bench.bench.run.store import setting_label
+from foucault_bench.bench.schema import setting_label
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_OK
 from foucault_bench.reports import charts
 

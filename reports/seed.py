@@ -13,7 +13,6 @@ report's section.
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +24,6 @@ from foucault_bench.reports.charts import integrator_style, save
 from foucault_bench.reports.interactive import drawn_points, from_matplotlib
 from foucault_bench.reports.document import Block, Figure, Heading, Paragraph, write_document
 
-DEFAULT_OUT = Path("results") / "seed"
 GREY = "#7f7f7f"
 DAY_LENGTH_COLOUR = "#b8860b"
 """Curves that are no integrator's (the 24 h day) get colours outside the family palette (reports.charts)."""
@@ -258,15 +256,11 @@ def seed_blocks(folder: Path, prefix: str) -> list[Block]:
     return blocks
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
-
-
-def main(args: argparse.Namespace) -> int:
-    if args.out.exists() and not args.out.is_dir():
-        raise InputError(f"--out {args.out} exists and is not a folder")
-    blocks = seed_blocks(args.out, "figures")
-    html_path, markdown_path = write_document(args.out, "The seed note revisited", blocks[1:],
-                                              markdown_name="SEED.md")
+def write_seed(out: Path) -> int:
+    """``foucault-bench seed``: the seed figures and findings written to folder ``out``. Exit status 0."""
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} exists and is not a folder")
+    blocks = seed_blocks(out, "figures")
+    html_path, markdown_path = write_document(out, "The seed note revisited", blocks[1:], markdown_name="SEED.md")
     print(f"seed figures and findings written: {html_path} and {markdown_path}")
     return 0

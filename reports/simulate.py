@@ -28,7 +28,6 @@ exact solution and the turning points are drawn on top of the trail.
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import textwrap
@@ -42,10 +41,10 @@ from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
 from foucault_bench.integrators import STATUS_OK, Problem, get_integrator
 from foucault_bench.integrators.registry import REGISTRY
-from foucault_bench.models import MODELS, PendulumParameters, get_model
+from foucault_bench.models import get_model
 from foucault_bench.models.analytic import linear_exact
-from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
 from foucault_bench.reports.charts import integrator_style
+from foucault_bench.reports.simulation_settings import SimulationSettings
 
 DEGREES_PER_HOUR_PER_RAD_S = math.degrees(1.0) * 3600.0
 OUTPUT_POINTS_PER_PERIOD = 16
@@ -66,29 +65,6 @@ TRAIL_SEGMENTS = 8
 """The trail is drawn as this many pieces of equal duration, the older the fainter."""
 TEXT_WRAP_CHARS = 46
 """Width (characters) at which messages in the figure are wrapped, so that they stay inside it."""
-
-
-@dataclass(frozen=True)
-class SimulationSettings:
-    """What one simulation integrates. Earth's rate is given as a multiple of the sidereal Ω_E."""
-
-    earth_rate_factor: float = 1.0
-    latitude_deg: float = 48.846
-    length_m: float = 67.0
-    amplitude_m: float = 3.0
-    hours: float = 1.0
-    model: str = "linear"
-    integrator: str = "verlet"
-    setting: float = 0.05
-    """k·h for a fixed-step integrator, the tolerance for an adaptive one."""
-
-    @property
-    def earth_rate_rad_s(self) -> float:
-        return self.earth_rate_factor * SIDEREAL_EARTH_RATE_RAD_S
-
-    def params(self) -> PendulumParameters:
-        return PendulumParameters(length_m=self.length_m, latitude_deg=self.latitude_deg,
-                                  amplitude_m=self.amplitude_m, earth_rate_rad_s=self.earth_rate_rad_s)
 
 
 @dataclass
@@ -448,89 +424,9 @@ def save_animation(settings: SimulationSettings, path: Path, frames: int, fps: i
     return path
 
 
-# --------------------------------------------------------------------------------------------------------------
-# command line
-# --------------------------------------------------------------------------------------------------------------
-class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
-    """Help with each option's default and, for ``--integrator`` and ``--model``, the registered choices (looked
-    up only when the help is shown, so that parsing imports no integrator)."""
-
-    def _get_help_string(self, action: argparse.Action) -> str | None:
-        text = action.help if action.default is None else super()._get_help_string(action)
-        if action.dest == "integrator":
-            from foucault_bench.integrators.registry import REGISTRY as registry
-
-            return f"{text}; one of: {', '.join(sorted(registry))}"
-        if action.dest == "model":
-            from foucault_bench.models import MODELS as models
-
-            return f"{text}; one of: {', '.join(models)}"
-        return text
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    defaults = SimulationSettings()
-    parser.formatter_class = _HelpFormatter
-    parser.add_argument("--integrator", metavar="NAME", default=defaults.integrator, help="registered integrator")
-    parser.add_argument("--model", metavar="NAME", default=defaults.model,
-                        help="model (linear is the model of the exact-solution overlay)")
-    parser.add_argument("--hours", type=float, default=defaults.hours, help="simulated time (h)")
-    parser.add_argument("--kh", type=float, default=None,
-                        help="k·h for a fixed-step integrator (default: 0.05)")
-    parser.add_argument("--tol", type=float, default=None, help="tolerance for an adaptive one (default: 1e-10)")
-    parser.add_argument("--earth-rate", type=float, default=defaults.earth_rate_factor,
-                        help="Earth's rate in multiples of the sidereal Ω_E (the slider spans 0.1-100)")
-    parser.add_argument("--latitude", type=float, default=defaults.latitude_deg, help="latitude (°, north +)")
-    parser.add_argument("--length", type=float, default=defaults.length_m, help="string length (m)")
-    parser.add_argument("--amplitude", type=float, default=defaults.amplitude_m,
-                        help="release amplitude (m, below the length)")
-    parser.add_argument("--save", metavar="FILE", type=Path, default=None, help="write an animation (.gif or .mp4) instead")
-    parser.add_argument("--frames", type=int, default=90, help="frames of the animation")
-    parser.add_argument("--fps", type=int, default=20, help="frames per second of the animation")
-
-
-def settings_from_args(args: argparse.Namespace) -> SimulationSettings:
-    """Validated settings; every problem is reported at once as an ``InputError``."""
-    problems = []
-    if args.integrator not in REGISTRY:
-        problems.append(f"unknown integrator {args.integrator!r}; known: {', '.join(sorted(REGISTRY))}")
-    if args.model not in MODELS:
-        problems.append(f"unknown model {args.model!r}; known: {', '.join(MODELS)}")
-    if not (math.isfinite(args.hours) and args.hours > 0):
-        problems.append(f"--hours must be > 0, got {args.hours}")
-    if args.save is not None and args.save.suffix.lower() not in (".gif", ".mp4"):
-        problems.append(f"--save must end in .gif or .mp4, got {args.save}")
-    if args.frames < 2 or args.fps < 1:
-        problems.append("--frames must be ≥ 2 and --fps ≥ 1")
-    adaptive = args.integrator in REGISTRY and REGISTRY[args.integrator].adaptive
-    if adaptive and args.kh is not None or not adaptive and args.tol is not None:
-        problems.append(f"{args.integrator} takes {'--tol' if adaptive else '--kh'}, not "
-                        f"{'--kh' if adaptive else '--tol'}")
-    setting = (args.tol if args.tol is not None else 1e-10) if adaptive else (args.kh if args.kh is not None else 0.05)
-    if not (math.isfinite(setting) and setting > 0):
-        problems.append(f"the step k·h or tolerance must be > 0, got {setting}")
-    if problems:
-        raise InputError(problems)
-    settings = SimulationSettings(earth_rate_factor=args.earth_rate, latitude_deg=args.latitude,
-                                  length_m=args.length, amplitude_m=args.amplitude, hours=args.hours,
-                                  model=args.model, integrator=args.integrator, setting=setting)
-    try:
-        params = settings.params()
-    except ValueError as error:
-        raise InputError(str(error)) from None
-    points = OUTPUT_POINTS_PER_PERIOD * settings.hours * 3600.0 / params.small_swing_period_s
-    if points > MAX_OUTPUT_POINTS:
-        raise InputError(f"{settings.hours:g} h of a {params.small_swing_period_s:.3g} s pendulum needs {points:.3g} "
-                         f"output points, more than {MAX_OUTPUT_POINTS}: shorten --hours")
-    return settings
-
-
-def main(args: argparse.Namespace) -> int:
-    settings = settings_from_args(args)
-    if args.save is not None:
-        path = save_animation(settings, args.save, args.frames, args.fps)
-        print(f"animation written: {path}")
-        return 0
+def show_interactive(settings: SimulationSettings) -> int:
+    """Open the interactive window (``InputError`` when there is no display or GUI backend); exit status 0
+    when the last simulation shown ran, 1 otherwise."""
     import matplotlib
 
     if os.name != "nt" and not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):

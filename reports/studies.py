@@ -32,7 +32,8 @@ import pandas as pd
 from tqdm import tqdm
 
 from foucault_bench.bench.problems.scenes import SEED_EARTH_RATE_RAD_S
-from foucault_bench.bench.run.store import ResultsStore, setting_label
+from foucault_bench.bench.run.store import ResultsStore
+from foucault_bench.bench.schema import setting_label
 from foucault_bench.bench.verdicts.columns import energy_scale, energy_verdicts, released_from_rest
 from foucault_bench.bench.verdicts.stability import measured_stability_limit, spectral_growth, step_matrix
 from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid

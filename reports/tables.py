@@ -22,24 +22,25 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
-from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS
+from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS, RUN_STATUSES
 from foucault_bench.bench.problems.scenes import Scene
 from foucault_bench.bench.verdicts import pareto
 from foucault_bench.bench.verdicts.convergence import observed_order
 from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS, cheapest_meeting, cost_column
-from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
+from foucault_bench.integrators import STATUS_DIVERGED, STATUS_OK
 from foucault_bench.integrators.registry import REGISTRY
 
 MATCHED_ACCURACY_TARGET = 1e-6
 """Reference error (max |r − r_ref| / A) a setting must reach to count in the matched-accuracy summary."""
 
-STATUSES = (STATUS_OK, STATUS_DIVERGED, STATUS_FAILED)
+STATUSES = RUN_STATUSES
 
 DERIVED_NOTES: dict[str, str] = {
     "runs": "runs stored for this scene and integrator",
     "ok": "runs that finished",
     "diverged": "runs whose state left the bounds or became non-finite",
     "failed": "runs that raised an error (message in `note`)",
+    "timeout": "runs stopped at the per-run time limit",
     "outcome": "whether any ok run reached the target reference error",
     "setting": "step as k·h (fixed-step) or tolerance (adaptive)",
     "note": "first diverged/failed message of this scene and integrator",
@@ -85,7 +86,7 @@ COLUMN_NOTES: dict[str, str] = {
     **DERIVED_NOTES,
 }
 INTEGER_COLUMNS: frozenset[str] = frozenset(
-    {c.name for c in COLUMNS if c.sql_type == "INTEGER"} | {"runs", "ok", "diverged", "failed", "rank", "points"})
+    {c.name for c in COLUMNS if c.sql_type == "INTEGER"} | {"runs", "ok", "diverged", "failed", "timeout", "rank", "points"})
 
 COMPACT_COLUMNS: tuple[str, ...] = (
     "scene", "model", "integrator", "family", "kh", "tol", "status", "reference_error", "energy_max_rel_error",
@@ -140,7 +141,7 @@ def per_integrator(frame: pd.DataFrame, target: float = MATCHED_ACCURACY_TARGET)
         row.update(_status_counts(group))
         rows.append(row)
     columns = ["scene", "integrator", "family", "outcome", "setting", "reference_error", cost, "nfev",
-               "runs", "ok", "diverged", "failed", "note"]
+               "runs", "ok", "diverged", "failed", "timeout", "note"]
     return pd.DataFrame(rows, columns=columns)
 
 

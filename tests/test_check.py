@@ -1,4 +1,4 @@
-"""Tests of the CI gate ``foucault-bench check`` (bench/gate/check.py) and its shipped thresholds.
+"""Tests of the CI gate ``foucault-bench check`` (bench/gate/) and its shipped thresholds.
 
 What they prove:
 
@@ -30,15 +30,10 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from foucault_bench.bench.gate.check import (
-    ERROR_COLUMNS,
-    evaluate,
-    headroom,
-    load_thresholds,
-    parse_thresholds,
-    render,
-    validate_against,
-)
+from foucault_bench.bench.gate.evaluate import evaluate, headroom
+from foucault_bench.bench.gate.render import render
+from foucault_bench.bench.gate.select import validate_against
+from foucault_bench.bench.gate.thresholds import ERROR_COLUMNS, load_thresholds, parse_thresholds
 from foucault_bench.bench.cli import main
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.schema import COLUMN_NAMES

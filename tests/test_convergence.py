@@ -7,7 +7,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from foucault_bench.bench.gate.check import evaluate, parse_thresholds
+from foucault_bench.bench.gate.evaluate import evaluate
+from foucault_bench.bench.gate.thresholds import parse_thresholds
 from foucault_bench.bench.problems.reference import reference_for
 from foucault_bench.bench.run.matrix import load_matrix
 from foucault_bench.bench.verdicts.columns import compute_verdicts

@@ -13,7 +13,8 @@ from pathlib import Path
 import pytest
 
 from foucault_bench.bench.cli import main as cli_main
-from foucault_bench.bench.gate.check import load_thresholds, planned_rows, validate_against
+from foucault_bench.bench.gate.select import planned_rows, validate_against
+from foucault_bench.bench.gate.thresholds import load_thresholds
 from foucault_bench.bench.run.matrix import load_matrix
 from foucault_bench.bench.schema import markdown_table
 from foucault_bench.reports.document import REFERENCE_DOCS, copy_reference_docs

@@ -142,3 +142,15 @@ def test_cache_entries_are_stored_in_files_named_after_their_keys(tmp_path) -> N
     cache_file.save(("sig b", "cpu"), "code b")
     assert cache_file.load(("sig a", "cpu")) == "code a" and cache_file.load(("sig b", "cpu")) == "code b"
     assert len(list(tmp_path.glob("f-1.py311.*.nbc"))) == 2  # one file per key, whatever the save order
+
+
+def test_jobs_check_matrix_is_valid_and_covers_the_quick_matrix(tmp_path) -> None:
+    from foucault_bench.bench.perf.limits import quick_jobs_matrix
+    from foucault_bench.bench.run.matrix import load_matrix
+
+    path = tmp_path / "jobs-check.toml"
+    path.write_text(quick_jobs_matrix(), encoding="utf-8")
+    matrix = load_matrix(path)
+    covered = {spec.integrator for spec in matrix.runs}
+    assert covered == {spec.integrator for spec in load_matrix("quick").runs}
+    assert len(matrix.runs) == len(covered)  # one heavy setting each

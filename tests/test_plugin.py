@@ -75,7 +75,7 @@ def run(site: Path | None, *argv: str, timeout: float = 600) -> subprocess.Compl
 PROBE = textwrap.dedent("""
     from foucault_bench.integrators import REGISTRY, is_built_in
     from foucault_bench.integrators.registry import ENTRY_POINT_MODULES
-    from foucault_bench.bench.run.matrix import code_version
+    from foucault_bench.bench.run.provenance import code_version
     toy = REGISTRY.get("toy_midpoint")
     print(toy is not None and not is_built_in(toy), toy and toy.family, ENTRY_POINT_MODULES, code_version())
 """)

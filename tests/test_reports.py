@@ -267,3 +267,13 @@ def test_a_scene_where_every_run_failed_still_draws_and_tabulates(tmp_path: Path
     summary = tables.per_integrator(failed)
     assert list(summary["outcome"]) == ["no ok run (failed)"] and list(summary["failed"]) == [1]
     assert list(tables.matched_accuracy(failed)["outcome"]) == ["not reached"] * 3
+
+
+def test_the_report_says_how_each_family_s_cost_was_measured() -> None:
+    from foucault_bench.reports.build import cost_basis_sentences
+
+    runs = pd.DataFrame({"family": ["runge-kutta", "runge-kutta", "multistep"],
+                         "integrator": ["dopri5", "scipy_rk45", "cvode_bdf_py"]})
+    text = cost_basis_sentences(runs)
+    assert "Family runge-kutta: dopri5: compiled" in text and "scipy_rk45: Python-driven" in text
+    assert "Family multistep: cvode_bdf_py: Python-driven" in text

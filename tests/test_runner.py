@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from foucault_bench.bench.cli import main as cli_main
-from foucault_bench.bench.run.matrix import code_version, load_matrix
+from foucault_bench.bench.run.matrix import load_matrix
+from foucault_bench.bench.run.provenance import code_version
 from foucault_bench.bench.run.runner import WORKER_DIED, run_matrix
 from foucault_bench.bench.schema import COLUMN_NAMES
 from foucault_bench.bench.run.store import ResultsStore
@@ -106,6 +107,11 @@ def test_quick_matrix_runs_end_to_end(tmp_path, capsys):
     ok = rows[rows["status"] == "ok"]
     assert ok["reference_error"].notna().all() and ok["energy_max_rel_error"].notna().all()
     assert (ok["wall_time_s"] > 0).all() and (ok["repeats"] >= 1).all() and (ok["peak_rss_mb"] > 0).all()
+    assert (ok["cpu_time_s"] > 0).all() and (ok["cpu_time_spread_s"] >= 0).all()
+    # the per-step energy error comes from the untimed monitored call, for the fixed-step loops only
+    fixed = ok["kh"].notna()
+    assert ok.loc[fixed, "energy_max_rel_error_steps"].notna().all()
+    assert ok.loc[~fixed, "energy_max_rel_error_steps"].isna().all()
     # every integrator of a scene on the scene's own output grid (no run stores its steps)
     grid_points = {scene.name: scene.n_intervals + 1 for scene in matrix.scenes}
     assert (rows["n_out"] == rows["scene"].map(grid_points)).all()

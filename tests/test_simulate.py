@@ -27,12 +27,11 @@ from foucault_bench.reports.simulate import (
     SimulationResult,
     SimulationSettings,
     SimulationView,
-    add_arguments,
     format_setting,
     open_window,
     save_animation,
-    settings_from_args,
 )
+from foucault_bench.bench.commands.simulate import add_arguments, settings_from_args
 
 SMALL = SimulationSettings(length_m=10.0, amplitude_m=0.5, hours=0.25, latitude_deg=48.8, integrator="verlet",
                            model="linear", setting=0.05)

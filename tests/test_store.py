@@ -120,7 +120,7 @@ def test_compare_finds_a_one_ulp_difference_and_reports_cost_ratios(filled):
 
 def test_summary_has_one_line_per_scene_and_integrator_with_the_best_error(filled):
     store, matrix_id, rows = filled
-    summary = summarize(store.frame()).set_index("integrator")
+    summary = pd.DataFrame(summarize(store.records())).set_index("integrator")
     assert set(summary.index) == {"rk4", "cvode_bdf"}
     assert summary.loc["rk4", "runs"] == 2
     assert summary.loc["rk4", "best_reference_error"] == 1e-4  # the finer of rows 0 (NaN) and 1
@@ -156,3 +156,74 @@ def test_results_command_without_a_database_exits_2(tmp_path, capsys):
     assert cli_main(["results", "--db", str(tmp_path / "none.sqlite")]) == 2
     err = capsys.readouterr().err
     assert "no results database" in err and "Traceback" not in err
+
+
+# --- declared facts and schema versions ------------------------------------------------------------------------
+
+
+def test_rows_carry_the_declared_integrator_facts():
+    from foucault_bench.bench.run.runner import base_row
+    from foucault_bench.integrators import REGISTRY
+
+    for spec in MATRIX.runs:
+        row = base_row(spec, "m")
+        integrator = REGISTRY[spec.integrator]
+        assert row["family"] == integrator.family and row["declared_order"] == integrator.order
+        assert row["adaptive"] == int(integrator.adaptive) and row["stages"] == integrator.stages
+        assert row["stability_limit_kh"] == integrator.stability_limit_kh
+
+
+def _old_database(path, extra_column: str | None = None) -> None:
+    """A database as written before the schema was versioned: no declared facts, user_version 0."""
+    import sqlite3
+
+    from foucault_bench.bench.schema import COLUMNS, DECLARED_FACTS
+
+    old = [column for column in COLUMNS if column.name == "family" or column.name not in DECLARED_FACTS]
+    names = [column.name for column in old] + ([extra_column] if extra_column else [])
+    with sqlite3.connect(path) as connection:
+        connection.execute(f"CREATE TABLE runs ({', '.join(names)}, PRIMARY KEY (matrix_id, run_key))")
+        connection.execute("CREATE TABLE matrix_runs (matrix_id TEXT PRIMARY KEY, matrix_name TEXT, started_utc TEXT)")
+        connection.execute("INSERT INTO matrix_runs VALUES ('old-1', 'old', '2026-01-01T00:00:00+00:00')")
+        connection.execute("INSERT INTO runs (run_key, matrix_id, scene, integrator, family, status, reference_error) "
+                           "VALUES ('k1', 'old-1', 'seed_2min', 'rk4', 'runge-kutta', 'ok', 1.5e-7)")
+    connection.close()
+
+
+def test_a_new_database_records_the_schema_version(tmp_path):
+    from foucault_bench.bench.schema import SCHEMA_VERSION
+
+    with ResultsStore(tmp_path / "new.sqlite") as store:
+        assert store.schema_version == SCHEMA_VERSION
+
+
+def test_an_older_database_is_migrated_and_its_unknown_facts_read_as_missing(tmp_path):
+    from foucault_bench.bench.schema import SCHEMA_VERSION
+
+    path = tmp_path / "old.sqlite"
+    _old_database(path)
+    with ResultsStore(path, create=False) as store:
+        assert store.schema_version == SCHEMA_VERSION
+        frame = store.frame()
+        assert set(COLUMN_NAMES) <= set(frame.columns)
+        row = frame.iloc[0]
+        assert row["integrator"] == "rk4" and row["reference_error"] == 1.5e-7 and row["family"] == "runge-kutta"
+        assert pd.isna(row["declared_order"]) and pd.isna(row["stability_limit_kh"])  # unknown, not guessed
+        assert {"cpu_model", "code_version"} <= set(store.matrix_runs().columns)
+
+
+@pytest.mark.parametrize("case", ["newer version", "unknown column"])
+def test_a_database_this_version_cannot_read_is_refused_in_one_line(tmp_path, capsys, case):
+    import sqlite3
+
+    path = tmp_path / "other.sqlite"
+    if case == "newer version":
+        with sqlite3.connect(path) as connection:
+            connection.execute("PRAGMA user_version = 99")
+        connection.close()
+    else:
+        _old_database(path, extra_column="colour")
+    assert cli_main(["results", "--db", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    expected = "newer than this foucault-bench reads" if case == "newer version" else "does not define (colour)"
+    assert len(err) == 1 and expected in err[0]

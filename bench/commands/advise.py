@@ -36,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def main(args: argparse.Namespace) -> int:
     from foucault_bench.bench.advise import advise, metric_problem, parse_target, render_json, render_text, \
         resolve_scene
-    from foucault_bench.bench.commands.run import default_jobs
+    from foucault_bench.bench.run.provenance import available_cores
     from foucault_bench.bench.run.store import ResultsStore
 
     target, problems = parse_target(args.target)
@@ -48,7 +48,7 @@ def main(args: argparse.Namespace) -> int:
         problems.append(problem)
     if problems:
         raise InputError(problems)
-    jobs = None if args.no_search else (args.jobs or default_jobs())
+    jobs = None if args.no_search else (args.jobs or available_cores())
     with ResultsStore(args.db, create=True) as store:
         answer = advise(store, scene, target, search_jobs=jobs, progress=not args.json and sys.stderr.isatty())
     print(render_json(answer) if args.json else render_text(answer))

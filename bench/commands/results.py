@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.commands.outputs import output_file
+from foucault_bench.bench.errors import InputError, require_extra
 from foucault_bench.bench.run.store import DEFAULT_DB
 
 
@@ -16,19 +17,25 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the matrix run to show or export: an id or a unique prefix (default: the latest)")
     chosen.add_argument("--all", action="store_true", help="export the rows of every matrix run")
     parser.add_argument("--csv", metavar="FILE", help="write the selected run rows to a CSV file")
-    parser.add_argument("--parquet", metavar="FILE", help="write the selected run rows to a Parquet file")
+    parser.add_argument("--parquet", metavar="FILE",
+                        help="write the selected run rows to a Parquet file (needs the 'parquet' extra)")
     parser.add_argument("--compare", nargs=2, metavar=("A", "B"),
                         help="compare two matrix runs: accuracy columns must match bit for bit (exit status 1 "
                              "if not); costs are shown as ratios B/A")
 
 
 def main(args: argparse.Namespace) -> int:
+    if args.parquet:
+        require_extra("pyarrow", "parquet", "--parquet")
     import pandas as pd
 
     from foucault_bench.bench.run.store import ResultsStore, summary_text
 
     if args.compare and (args.csv or args.parquet or args.all or args.matrix_id):
         raise InputError("--compare takes two matrix ids and no other selection or export option")
+    for option, path in (("--csv", args.csv), ("--parquet", args.parquet)):
+        if path:
+            output_file(path, option)
     with ResultsStore(args.db, create=False) as store:
         if args.compare:
             return _compare(store, *args.compare)
@@ -42,12 +49,13 @@ def main(args: argparse.Namespace) -> int:
         if args.csv or args.parquet:
             return 0
         runs = store.matrix_runs()[["matrix_id", "matrix_name", "status", "started_utc", "finished_utc",
-                                    "runs_planned", "rows_stored", "ok", "diverged", "failed", "host", "git_commit"]]
+                                    "runs_planned", "rows_stored", "ok", "diverged", "failed", "timeout", "host",
+                                    "git_commit"]]
         with pd.option_context("display.width", 200, "display.max_columns", None):
             print(runs.to_string(index=False, na_rep="–"))
         matrix_id = store.resolve_matrix_id(args.matrix_id)
         print(f"\nmatrix run {matrix_id}:")
-        print(summary_text(store.frame(matrix_id)))
+        print(summary_text(store.records(matrix_id)))
     return 0
 
 

@@ -8,12 +8,12 @@ unknown integrator, or a plug-in module that does not import or registers no int
 from __future__ import annotations
 
 import argparse
-import difflib
 import importlib
 import os
 import sys
 
 from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.validation import suggestion
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -54,9 +54,8 @@ def main(args: argparse.Namespace) -> int:
     for module_name in args.plugin:
         load_plugin(module_name)
     if args.name not in REGISTRY:
-        close = difflib.get_close_matches(args.name, list(REGISTRY), n=1)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
-        raise InputError(f"unknown integrator {args.name!r}{hint}; known integrators: {', '.join(sorted(REGISTRY))}")
+        raise InputError(f"unknown integrator {args.name!r}{suggestion(args.name, REGISTRY)}; "
+                         f"known integrators: {', '.join(sorted(REGISTRY))}")
     checks = []
     for check in iter_checks(REGISTRY[args.name]):
         print(f"{check.label:4s}  {check.name}: {check.detail}", flush=True)

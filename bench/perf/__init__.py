@@ -9,11 +9,16 @@ Sections (one module each; each returns target rows and a detail table):
 
 * ``loops`` (``fixed_step``): fixed-step loops against plain C loops compiled now with ``cc -O3``;
 * ``adapters``: CVODE, heyoka and solve_ivp adapters against the bare libraries;
-* ``cvode``: CVODE with compiled callbacks against the same solves driven by scikit-sundae;
 * ``compile`` (``compile_cache``): cold and warm compile time per integrator;
 * ``memory``: peak RSS of 10⁷- and 10⁸-step runs with streaming verdicts;
 * ``sweeps``: a latitude sweep with heyoka's batch mode and ensembles against a scalar loop;
-* ``matrices``: wall time of the quick and default matrices, cold and warm (compile once).
+* ``matrices``: wall time of the quick and default matrices, cold and warm (compile once);
+* ``limits``: each integrator family against its own limit (compiled CVODE per right-hand-side evaluation
+  against scikit-sundae's, ``bench.perf.cvode``; the compiled Runge-Kutta pairs against scipy's at equal
+  nfev, ``bench.perf.erk``; heyoka's adapter against bare heyoka) and ``cpu_time_s`` at ``--jobs 2`` against
+  ``--jobs 1``.
+* ``startup``: ``--help`` of every command, and where a 5-run matrix's time goes (imports, validation,
+  references, integration, store).
 
 The summary prints one line per measured figure with its target and ``met``/``missed`` (``info`` where the
 brief sets no target, ``skipped`` with the reason where it could not be measured, e.g. no C compiler). The
@@ -22,7 +27,6 @@ exit status is 0 whether targets are met or not: the table is the result.
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import sys
 import time
@@ -33,20 +37,13 @@ from foucault_bench.bench.perf.measure import ROW_HEADERS, Row, machine_descript
 SECTIONS: dict[str, str] = {
     "loops": "foucault_bench.bench.perf.fixed_step",
     "adapters": "foucault_bench.bench.perf.adapters",
-    "cvode": "foucault_bench.bench.perf.cvode",
     "compile": "foucault_bench.bench.perf.compile_cache",
     "memory": "foucault_bench.bench.perf.memory",
     "sweeps": "foucault_bench.bench.perf.sweeps",
     "matrices": "foucault_bench.bench.perf.matrices",
+    "limits": "foucault_bench.bench.perf.limits",
+    "startup": "foucault_bench.bench.perf.startup",
 }
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--quick", action="store_true",
-                        help="a fast subset of each section (shorter runs, fewer repeats, quick matrix only)")
-    parser.add_argument("--only", action="append", choices=list(SECTIONS), metavar="SECTION",
-                        help=f"run only this section (repeatable): {', '.join(SECTIONS)}")
-    parser.add_argument("--markdown", type=Path, metavar="PATH", help="also write every table as Markdown to PATH")
 
 
 def _table(rows: list[list], headers: list[str], markdown: bool) -> str:
@@ -55,11 +52,12 @@ def _table(rows: list[list], headers: list[str], markdown: bool) -> str:
     return tabulate(rows, headers, tablefmt="github" if markdown else "simple", disable_numparse=True)
 
 
-def main(args: argparse.Namespace) -> int:
+def run(sections: list[str], *, quick: bool, markdown_path: Path | None) -> int:
+    """Measure ``sections`` (names of ``SECTIONS``; a fast subset of each with ``quick``), print every table and
+    the targets, and also write them as Markdown to ``markdown_path``; exit status 0 (the table is the result)."""
     from foucault_bench.bench.run.timing import limit_threads
 
     limit_threads()  # one thread per native pool, as in the runner's workers (set before numpy is imported)
-    sections = args.only or list(SECTIONS)
     machine = machine_description()
     print("\n".join(f"{key}: {value}" for key, value in machine.items()), flush=True)
     summary: list[Row] = []
@@ -67,7 +65,7 @@ def main(args: argparse.Namespace) -> int:
     for name in sections:
         started = time.perf_counter()
         print(f"\n== {name} ==", flush=True)
-        rows, table, headers = importlib.import_module(SECTIONS[name]).run(args.quick)
+        rows, table, headers = importlib.import_module(SECTIONS[name]).run(quick)
         elapsed = time.perf_counter() - started
         if table:
             print(_table(table, headers, markdown=False), flush=True)
@@ -78,8 +76,8 @@ def main(args: argparse.Namespace) -> int:
     print(_table([row.cells() for row in summary], ROW_HEADERS, markdown=False))
     counts = {verdict: sum(row.verdict == verdict for row in summary) for verdict in ("met", "missed", "info", "skipped")}
     print(", ".join(f"{count} {verdict}" for verdict, count in counts.items()))
-    if args.markdown:
+    if markdown_path:
         markdown += ["## Targets", "", _table([row.cells() for row in summary], ROW_HEADERS, markdown=True), ""]
-        args.markdown.write_text("\n".join(markdown))
-        print(f"tables written to {args.markdown}", file=sys.stderr)
+        markdown_path.write_text("\n".join(markdown))
+        print(f"tables written to {markdown_path}", file=sys.stderr)
     return 0

@@ -1,13 +1,14 @@
 """Section ``adapters``: our adaptive-integrator adapters against the bare libraries.
 
-Each adapter's ``solve`` (as the runner calls it: verdict streams on) is timed against the library called
-directly with the same compiled right-hand side, Jacobian, tolerances, output grid and turning-point event
-(none for CVODE, whose adapters time the output grid only), set up once outside the timed call as a user would. Target: adapter ≤ 1.05× the bare call. Both sides must
-return the same states (checked); what remains is the adapter's own work (validation, bookkeeping, silencing
-the C libraries' output, the step guards of the scipy adapter, the copy of heyoka's compiled integrator).
+Each adapter's ``solve`` (as the runner times it: ``monitor=False``, integrate to the output grid, no event)
+is timed against the library called directly with the same compiled right-hand side, Jacobian, tolerances
+and output grid, set up once outside the timed call as a user would (heyoka: one compiled integrator, reset
+before each call). Target: adapter ≤ 1.05× the bare call. Both sides must return the same states (checked);
+what remains is the adapter's own work (validation, bookkeeping, silencing the C libraries' output, the step
+guards of the scipy adapter, the reset of heyoka's reused integrator).
 
 Also reported for CVODE: the time per right-hand-side evaluation of a whole scikit-sundae solve
-(``cvode_*_py``; the compiled ``cvode_*`` are in section ``cvode``), the cost of one call of the numba
+(``cvode_*_py``; the compiled ``cvode_*`` are in section ``limits``), the cost of one call of the numba
 right-hand side from Python, the same solve's cost per evaluation with a plain-Python oscillator
 (scikit-sundae's own per-callback cost), and the effect of the analytic Jacobian (heyoka's symbolic
 derivative compiled by numba, ``Model.numba_jacobian_into``) against CVODE's internal difference quotients.
@@ -70,26 +71,16 @@ def bare_cvode(problem, method: str, analytic_jacobian: bool = True) -> Callable
 
 
 def bare_heyoka(problem) -> Callable[[], Any]:
-    """heyoka's taylor_adaptive compiled once; each call resets time, state and event log and propagates the grid."""
+    """heyoka's taylor_adaptive compiled once; each call resets time and state and propagates the grid."""
     import heyoka
 
     model = problem.model
-    system = model.heyoka_system()
-    x, y, vx, vy = (variable for variable, _ in system)
-    rows: list = []
-
-    def record(integrator, t, d_sign):
-        integrator.update_d_output(t)
-        rows.append((float(t), float(integrator.d_output[0]), float(integrator.d_output[1])))
-
-    event = heyoka.nt_event(x * vx + y * vy, record, direction=heyoka.event_direction.negative)
     pars = model.heyoka_parameters(problem.parameter_vector)
-    integrator = heyoka.taylor_adaptive(system, problem.initial_state, tol=heyoka_tolerance(problem.params, TOL),
-                                        pars=pars, nt_events=[event])
+    integrator = heyoka.taylor_adaptive(model.heyoka_system(), problem.initial_state,
+                                        tol=heyoka_tolerance(problem.params, TOL), pars=pars)
     grid = problem.t_out
 
     def call():
-        rows.clear()
         integrator.time = 0.0
         integrator.state[:] = problem.initial_state
         return integrator.propagate_grid(grid)
@@ -97,16 +88,8 @@ def bare_heyoka(problem) -> Callable[[], Any]:
     return call
 
 
-def _radial_scipy(t, y, p):
-    return y[0] * y[2] + y[1] * y[3]
-
-
-_radial_scipy.terminal = False
-_radial_scipy.direction = -1.0
-
-
 def bare_solve_ivp(problem, method: str) -> Callable[[], Any]:
-    """``scipy.integrate.solve_ivp`` with the adapter's right-hand side, Jacobian (LSODA), tolerances, grid, event."""
+    """``scipy.integrate.solve_ivp`` with the adapter's right-hand side, Jacobian (LSODA), tolerances and grid."""
     from scipy.integrate import solve_ivp
 
     model = problem.model
@@ -114,7 +97,7 @@ def bare_solve_ivp(problem, method: str) -> Callable[[], Any]:
     atol = absolute_tolerance(problem.params, TOL)
     p = problem.parameter_vector
     return lambda: solve_ivp(model.numba_rhs, (0.0, problem.t_end_s), problem.initial_state, method=method,
-                             t_eval=problem.t_out, events=_radial_scipy, args=(p,), rtol=TOL, atol=atol, **options)
+                             t_eval=problem.t_out, args=(p,), rtol=TOL, atol=atol, **options)
 
 
 def _final_state(result: Any) -> np.ndarray:
@@ -174,7 +157,7 @@ def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
     rows, table = [], []
     for name, make_bare in BARE.items():
         integrator = get_integrator(name)
-        adapter = lambda: integrator.solve(problem, tol=TOL)  # noqa: E731  (the call timed)
+        adapter = lambda: integrator.solve(problem, tol=TOL, monitor=False)  # noqa: E731  (as the runner times it)
         bare = make_bare(problem)
         solution, reference = adapter(), bare()
         difference = np.max(np.abs(solution.y[-1] - _final_state(reference)))
@@ -203,9 +186,9 @@ def jacobian_effect(problem, rounds: int) -> list[Row]:
     rows = []
     for cls in (CvodeAdams, CvodeBdf):
         analytic, quotients = cls(analytic_jacobian=True), cls(analytic_jacobian=False)
-        with_jac, without = analytic.solve(problem, tol=TOL), quotients.solve(problem, tol=TOL)
-        times = interleaved({"analytic": lambda: analytic.solve(problem, tol=TOL),
-                             "quotients": lambda: quotients.solve(problem, tol=TOL)}, rounds)
+        with_jac, without = analytic.solve(problem, tol=TOL, monitor=False), quotients.solve(problem, tol=TOL, monitor=False)
+        times = interleaved({"analytic": lambda: analytic.solve(problem, tol=TOL, monitor=False),
+                             "quotients": lambda: quotients.solve(problem, tol=TOL, monitor=False)}, rounds)
         rows.append(Row(SECTION, f"{cls.name}: analytic Jacobian / difference quotients (time)",
                         median_ratio(times["analytic"], times["quotients"]), "×",
                         note=f"nfev {with_jac.nfev} vs {without.nfev} (incl. 4 per quotient Jacobian), "

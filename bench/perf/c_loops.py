@@ -12,6 +12,7 @@ and made the linear-model loops 1.3-2.6× slower on the AMD EPYC of bench/PERF.m
 from __future__ import annotations
 
 import ctypes
+import importlib.resources
 import os
 import shutil
 import subprocess
@@ -21,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-C_SOURCE = Path(__file__).with_name("loops.c")
+C_SOURCE = Path(str(importlib.resources.files("foucault_bench.bench.perf").joinpath("loops.c")))
+"""The C loops (package data, found as every data file is: ``importlib.resources``)."""
 C_FLAGS = ("-O3", "-march=native", "-ffp-contract=off", "-fno-tree-vectorize", "-fPIC", "-shared")
 MODELS = ("linear", "spherical")
 SCHEMES = ("explicit_euler", "symplectic_euler", "rk4", "verlet")

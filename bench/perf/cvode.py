@@ -1,4 +1,4 @@
-"""Section ``cvode``: CVODE with compiled callbacks against the same CVODE driven by scikit-sundae.
+"""Family limit ``cvode`` (section ``limits``): compiled CVODE against the same CVODE driven by scikit-sundae.
 
 For each method (Adams, BDF) the compiled path (``cvode_adams``, ``cvode_bdf``: numba ``cfunc`` right-hand side
 and Jacobian, compiled output loop) and the Python-driven path (``cvode_adams_py``, ``cvode_bdf_py``:

@@ -1,4 +1,4 @@
-"""Section ``erk``: the compiled embedded Runge-Kutta pairs against scipy's Python-driven ones at equal nfev.
+"""Family limit ``erk`` (section ``limits``): the compiled Runge-Kutta pairs against scipy's at equal nfev.
 
 ``dopri5`` against ``scipy_rk45`` and ``dop853`` against ``scipy_dop853``, each integrator's ``solve`` on the
 Panthéon scene (linear model, 1 h, 2.05 s output grid) at tol = ``TOL``, integrating to the output grid: with

@@ -8,7 +8,8 @@ warm quick run takes ≤ 30 % of the cold one (compile once), and the default ma
 ``--quick`` runs the quick matrix only.
 
 Where the time goes is read back from the stored rows: per run, warm-up + timed repeats ≈
-``compile_time_s + (1 + repeats) × wall_time_s`` (bench.run.timing's protocol), summed per integrator; the
+``compile_time_s + (1 + repeats) × cpu_time_s`` (bench.run.timing's protocol; CPU time, so that the figure
+does not grow with the machine's load), summed per integrator; the
 remainder of the wall time (× the workers) is start-up, references and scheduling.
 """
 
@@ -44,7 +45,7 @@ def time_spent(db: Path) -> pd.DataFrame:
     with ResultsStore(db, create=False) as store:
         frame = store.frame()
     repeats = frame["repeats"].fillna(0)
-    frame["busy_s"] = frame["compile_time_s"].fillna(0) + frame["wall_time_s"].fillna(0) * (1 + repeats)
+    frame["busy_s"] = frame["compile_time_s"].fillna(0) + frame["cpu_time_s"].fillna(0) * (1 + repeats)
     return frame
 
 
@@ -61,9 +62,9 @@ def dominant(frame: pd.DataFrame, label: str, wall_s: float, jobs: int) -> list[
 
 def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
     """Cold and warm matrix runs; the rows, a table of where the time went and its headers."""
-    from foucault_bench.bench.commands.run import default_jobs
+    from foucault_bench.bench.run.provenance import available_cores
 
-    jobs = default_jobs()
+    jobs = available_cores()
     headers = ["run", "integrator", "runs", "busy s", "share of workers' time", "longest run s"]
     rows, table, walls = [], [], {}
     for name in ("quick",) if quick else ("quick", "default"):

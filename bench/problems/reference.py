@@ -28,14 +28,14 @@ import os
 import tempfile
 import time
 from dataclasses import dataclass
+from importlib.metadata import version
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from foucault_bench.bench.problems.scenes import Scene
-from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
-from foucault_bench.bench.verdicts.columns import released_from_rest
+from foucault_bench.bench.run.provenance import PACKAGE_ROOT, source_digest
 from foucault_bench.integrators import STATUS_OK, get_integrator
 from foucault_bench.integrators.heyoka_taylor import REFERENCE_TOLERANCE
 
@@ -44,8 +44,6 @@ CACHE_ENVIRONMENT_VARIABLE = "FOUCAULT_BENCH_CACHE"
 DEFAULT_CACHE_DIRECTORY = Path.home() / ".cache" / "foucault-bench"
 CACHE_FORMAT = 1
 """Bump when the layout of the cached files changes."""
-
-_PACKAGE_ROOT = Path(__file__).resolve().parents[2]
 
 
 @dataclass
@@ -85,18 +83,14 @@ def cache_directory() -> Path:
 
 
 @functools.lru_cache(maxsize=None)
-def code_version() -> str:
-    """SHA-256 (16 hex digits) of the sources that determine a reference trajectory, and heyoka's version."""
-    import heyoka
-
+def sources_version() -> str:
+    """SHA-256 (16 hex digits) of the sources that determine a reference trajectory, and heyoka's version
+    (``bench.run.provenance.source_digest``; the version from the package metadata: importing heyoka to read
+    it would cost a worker about 0.7 s)."""
     integrator_module = Path(inspect.getsourcefile(type(get_integrator(REFERENCE_INTEGRATOR)))).resolve()
-    sources = sorted((_PACKAGE_ROOT / "models").glob("*.py"))
-    sources += [integrator_module, _PACKAGE_ROOT / "integrators" / "adaptive.py"]
-    digest = hashlib.sha256(f"heyoka {heyoka.__version__}; format {CACHE_FORMAT}".encode())
-    for path in dict.fromkeys(sources):
-        digest.update(path.name.encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:16]
+    sources = sorted((PACKAGE_ROOT / "models").glob("*.py"))
+    sources += [integrator_module, PACKAGE_ROOT / "integrators" / "adaptive.py"]
+    return source_digest(f"heyoka {version('heyoka')}; format {CACHE_FORMAT}", dict.fromkeys(sources))
 
 
 def physics_identity(scene: Scene) -> dict[str, Any]:
@@ -111,12 +105,12 @@ def physics_identity(scene: Scene) -> dict[str, Any]:
 
 def reference_key(scene: Scene) -> str:
     """Cache key of the scene's reference: SHA-256 (24 hex digits) of its physics, the reference integrator
-    and tolerance, and ``code_version``."""
+    and tolerance, and ``sources_version``."""
     identity = {
         "scene": physics_identity(scene),
         "integrator": REFERENCE_INTEGRATOR,
         "tolerance": REFERENCE_TOLERANCE,
-        "code": code_version(),
+        "code": sources_version(),
     }
     return hashlib.sha256(json.dumps(identity, sort_keys=True, default=repr).encode()).hexdigest()[:24]
 
@@ -171,6 +165,13 @@ def _compute(scene: Scene, key: str) -> Reference:
 
 def _derive(scene: Scene, t: np.ndarray, y: np.ndarray, **provenance: Any) -> Reference:
     """A ``Reference`` with the turning points and precession rate measured on its grid."""
+    # here, not at the top: the verdicts import scipy.interpolate, which a process that only reads matrices
+    # (and so this module's constants) should not pay
+    from foucault_bench.bench.verdicts.columns import released_from_rest
+    from foucault_bench.bench.verdicts.turning_points import (
+        grid_accelerations, precession_rate, turning_points_from_grid,
+    )
+
     points = turning_points_from_grid(t, y, grid_accelerations(scene.model_object, scene.params, y),
                                       released_from_rest(scene.params))
     rate, stderr = precession_rate(points)
@@ -186,7 +187,7 @@ def _store(path: Path, scene: Scene, reference: Reference) -> None:
         "physics": physics_identity(scene),
         "integrator": reference.integrator,
         "tolerance": reference.tolerance,
-        "code_version": code_version(),
+        "code_version": sources_version(),
         "steps": reference.steps,
         "compute_time_s": reference.compute_time_s,
     }

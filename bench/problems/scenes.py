@@ -27,18 +27,20 @@ How the built-in scenes were chosen:
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import math
 import re
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
 from foucault_bench.bench.errors import InputError
-from foucault_bench.integrators import Problem
+from foucault_bench.bench.validation import finite_number, is_number, suggestion
 from foucault_bench.models import MODELS, SIDEREAL_EARTH_RATE_RAD_S, Model, PendulumParameters, get_model
 from foucault_bench.models.parameters import STANDARD_GRAVITY_M_S2
+
+if TYPE_CHECKING:
+    from foucault_bench.integrators import Problem
 
 MIN_OUTPUT_INTERVALS_PER_PERIOD = 5.0
 """The output interval must be at most 1/5 of the small-swing period: turning points are located on the grid
@@ -89,7 +91,7 @@ class Scene:
         if not SCENE_NAME_PATTERN.match(self.name):
             problems.insert(0, f"scene name {self.name!r} may hold only letters, digits, '_', '.' and '-'")
         if self.model not in MODELS:
-            problems.insert(0, f"model: unknown model {self.model!r}{_suggestion(self.model, MODELS)}; "
+            problems.insert(0, f"model: unknown model {self.model!r}{suggestion(self.model, MODELS)}; "
                                f"known models: {', '.join(MODELS)}")
         if problems:
             raise InputError(problems)
@@ -108,6 +110,8 @@ class Scene:
 
     def problem(self) -> Problem:
         """The integration problem: model, parameters and the scene's output grid."""
+        from foucault_bench.integrators import Problem  # here: reading scenes needs no integrator
+
         return Problem(model=self.model_object, params=self.params, t_out=self.output_grid())
 
 
@@ -115,9 +119,9 @@ def grid_problems(period_s: float, duration_s: float, output_interval_s: float) 
     """What is wrong with a duration and output interval for a pendulum of small-swing period ``period_s``
     (empty list: nothing)."""
     problems: list[str] = []
-    if not (_is_number(duration_s) and math.isfinite(duration_s) and duration_s > 0):
+    if not (finite_number(duration_s, positive=True)):
         problems.append(f"duration_s must be a number of seconds > 0, got {duration_s!r}")
-    if not (_is_number(output_interval_s) and math.isfinite(output_interval_s) and output_interval_s > 0):
+    if not (finite_number(output_interval_s, positive=True)):
         problems.append(f"output_interval_s must be a number of seconds > 0, got {output_interval_s!r}")
     if problems:
         return problems
@@ -176,7 +180,7 @@ def scene_from_mapping(name: str, mapping: Mapping[str, Any]) -> Scene:
         raise InputError([f"a scene must be a table of fields, got {mapping!r}"])
     for key in mapping:
         if key not in SCENE_KEYS:
-            problems.append(f"unknown key {key!r}{_suggestion(str(key), SCENE_KEYS)}; "
+            problems.append(f"unknown key {key!r}{suggestion(str(key), SCENE_KEYS)}; "
                             f"known keys: {', '.join(SCENE_KEYS)}")
     values: dict[str, Any] = {}
     base_name = mapping.get("base")
@@ -190,7 +194,7 @@ def scene_from_mapping(name: str, mapping: Mapping[str, Any]) -> Scene:
                                     f"for the changed fields): {base.why_model}",
                           assumptions=base.assumptions)
         else:
-            problems.append(f"base: unknown scene {base_name!r}{_suggestion(str(base_name), SCENES)}; "
+            problems.append(f"base: unknown scene {base_name!r}{suggestion(str(base_name), SCENES)}; "
                             f"built-in scenes: {', '.join(SCENES)}")
     values.update({key: value for key, value in mapping.items() if key in SCENE_KEYS and key != "base"})
     if base_name is None:
@@ -240,24 +244,25 @@ def _field_problems(values: Mapping[str, Any]) -> list[str]:
         if key not in values:
             continue
         value = values[key]
-        if not _is_number(value) or not math.isfinite(value):
-            problems.append(f"{key} must be a finite number ({unit}), got {value!r}")
+        if not finite_number(value):
+            shown = repr(value) if len(repr(value)) <= 40 else f"{repr(value)[:20]}…({len(repr(value))} characters)"
+            problems.append(f"{key} must be a finite number ({unit}), got {shown}")
         elif not in_range(value):
             problems.append(f"{key} must be {condition} ({unit}), got {value!r}")
     length, amplitude = values.get("length_m"), values.get("amplitude_m")
-    if _is_number(length) and _is_number(amplitude) and length > 0 and amplitude >= length:
+    if is_number(length) and is_number(amplitude) and length > 0 and amplitude >= length:
         problems.append(f"amplitude_m = {amplitude!r} m must be less than length_m = {length!r} m "
                         "(the release point lies on the sphere of radius L, below the pivot)")
     velocity = values.get("release_velocity_m_s")
     if velocity is not None and not (
         isinstance(velocity, (list, tuple)) and len(velocity) == 2
-        and all(_is_number(v) and math.isfinite(v) for v in velocity)
+        and all(finite_number(v) for v in velocity)
     ):
         problems.append(f"release_velocity_m_s must be a pair [vx, vy] of finite numbers (m/s), got {velocity!r}")
     if "centrifugal" in values and not isinstance(values["centrifugal"], bool):
         problems.append(f"centrifugal must be true or false, got {values['centrifugal']!r}")
     if "model" in values and values["model"] not in MODELS:
-        problems.append(f"model: unknown model {values['model']!r}{_suggestion(str(values['model']), MODELS)}; "
+        problems.append(f"model: unknown model {values['model']!r}{suggestion(str(values['model']), MODELS)}; "
                         f"known models: {', '.join(MODELS)}")
     for key in TEXT_KEYS:
         if key in values and not isinstance(values[key], str):
@@ -270,15 +275,6 @@ def _field_problems(values: Mapping[str, Any]) -> list[str]:
         interval = values.get("output_interval_s", default_output_interval(period, values["duration_s"]))
         problems += grid_problems(period, values["duration_s"], interval)
     return problems
-
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
-
-
-def _suggestion(word: str, choices) -> str:
-    close = difflib.get_close_matches(word, list(choices), n=1)
-    return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 # --- the built-in scenes -----------------------------------------------------------------------------------------

@@ -21,47 +21,58 @@ A matrix file (read with ``tomllib``) looks like this (bench/README.md "Benchmar
 
     [timing]                              # the timing protocol (bench.run.timing.TimingPolicy)
     min_repeats = 3
+    run_timeout_s = 600                   # per-run time limit (DEFAULT_RUN_TIMEOUT_S); --run-timeout overrides
 
 Step sizes are given as kh = k·h (k = √(g/L)), the quantity the stability limits and error constants are written
 in (integrators/README.md "Step sizes in kh"): the step in seconds is h = kh / k, and the fixed-step loop shortens
 it (never lengthens it) to fit a whole number of steps in each output interval (``integrators.fixed_step``).
 
 ``load_matrix`` refuses a bad file before anything runs and reports every problem at once
-(``bench.errors.InputError``), with a suggestion for misspelt names.
+(``bench.errors.InputError``), with a suggestion for misspelt names. Validation takes time linear in the
+file's size. Settings whose work is absurd are refused with the estimate: more than ``MAX_STEPS`` fixed steps
+(duration·k/kh) in a run, more than ``MAX_OUTPUT_POINTS`` points on a scene's output grid, or a tolerance
+below the double-precision unit roundoff (no double-precision integrator can meet it).
+
+Plug-ins (``plugins``) are Python modules: importing one runs its code. They are imported only once the rest
+of the matrix is valid, and each must register at least one integrator.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import difflib
-import functools
-import hashlib
 import importlib
 import importlib.util
-import json
 import math
-import subprocess
-import tomllib
+from collections import Counter
+import functools
 from dataclasses import dataclass
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR, physics_identity
 from foucault_bench.bench.problems.scenes import SCENES, Scene, scene_from_mapping
-from foucault_bench.bench.run.store import setting_label
+from foucault_bench.bench.run.provenance import code_version, digest
 from foucault_bench.bench.run.timing import TimingPolicy
+from foucault_bench.bench.schema import declared_facts, setting_label
+from foucault_bench.bench.validation import built_in_names, is_number, read_toml, suggestion
 
 TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "release_azimuth_deg", "integrators", "kh", "tol",
                   "override", "plugins", "timing")
 SETTING_KEYS = ("kh", "tol")
-TIMING_KEYS = tuple(field.name for field in dataclasses.fields(TimingPolicy))
-BUILT_IN_DIRECTORY = Path(__file__).resolve().parents[1] / "matrices"
-PACKAGE_ROOT = Path(__file__).resolve().parents[2]
-NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "bench/problems/scenes.py", "bench/problems/reference.py",
-                  "bench/verdicts/*.py", "bench/run/runner.py", "bench/run/timing.py")
-"""Source files (relative to the package root) whose contents are part of every run key."""
+RUN_TIMEOUT_KEY = "run_timeout_s"
+TIMING_KEYS = (*(field.name for field in dataclasses.fields(TimingPolicy)), RUN_TIMEOUT_KEY)
+DEFAULT_RUN_TIMEOUT_S = 600.0
+"""Per-run time limit (s) when neither the matrix nor --run-timeout gives one: well above the slowest run of
+the built-in matrices (bench/README.md, "Nothing is lost", has the measurement)."""
+MAX_STEPS = 1e10
+"""More fixed steps than this in one run is refused (about an hour per run even at 3 ns a step)."""
+MAX_OUTPUT_POINTS = 10**7
+"""More output points per scene than this is refused (each solution holds 4 doubles per point: 320 MB)."""
+UNIT_ROUNDOFF = 2.0**-53
+"""Double-precision unit roundoff u = 2⁻⁵³ (Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed., §2.1)."""
+BUILT_IN_FOLDER = "matrices"
+"""Package folder of the built-in matrices (``bench/matrices/NAME.toml``, package data)."""
 
 
 @dataclass(frozen=True)
@@ -75,6 +86,8 @@ class RunSpec:
     plugins: tuple[str, ...]
     timing: TimingPolicy
     code_version: str
+    declared: tuple[tuple[str, Any], ...] = ()
+    """The integrator's declared facts as (results column, value) pairs (``bench.schema.declared_facts``)."""
 
     @property
     def step_s(self) -> float | None:
@@ -89,8 +102,8 @@ class RunSpec:
     def run_key(self) -> str:
         """SHA-256 (16 hex digits) of the scene's name and physics, the integrator, its setting and the code
         version."""
-        return _digest([self.scene.name, physics_identity(self.scene), self.integrator, self.kh, self.tol,
-                        self.code_version])
+        return digest([self.scene.name, physics_identity(self.scene), self.integrator, self.kh, self.tol,
+                       self.code_version])
 
 
 @dataclass(frozen=True)
@@ -104,20 +117,17 @@ class Matrix:
     runs: tuple[RunSpec, ...]
     plugins: tuple[str, ...]
     timing: TimingPolicy
+    run_timeout_s: float = DEFAULT_RUN_TIMEOUT_S
 
     @functools.cached_property
     def matrix_hash(self) -> str:
         """Hash of the name, every run key and the timing policy: equal hashes mean the same work."""
-        return _digest([self.name, sorted(run.run_key for run in self.runs), dataclasses.asdict(self.timing)])
-
-
-def _digest(value: Any) -> str:
-    return hashlib.sha256(json.dumps(value, sort_keys=True, default=repr).encode()).hexdigest()[:16]
+        return digest([self.name, sorted(run.run_key for run in self.runs), dataclasses.asdict(self.timing)])
 
 
 def built_in_matrices() -> list[str]:
     """Names of the matrices shipped with the package (``bench/matrices/NAME.toml``, package data)."""
-    return sorted(path.stem for path in BUILT_IN_DIRECTORY.glob("*.toml"))
+    return built_in_names(BUILT_IN_FOLDER)
 
 
 def load_matrix(name_or_path: str | Path) -> Matrix:
@@ -125,33 +135,59 @@ def load_matrix(name_or_path: str | Path) -> Matrix:
 
     Raises ``InputError`` listing every problem found, one message each.
     """
-    text, source, default_name = _read_matrix_text(str(name_or_path))
-    try:
-        document = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:  # its message carries "(at line L, column C)"
-        raise InputError(f"{source}: not valid TOML: {error}") from None
+    document, source, _ = read_toml(name_or_path, folder=BUILT_IN_FOLDER, kind="matrix")
+    default_name = str(name_or_path) if source.startswith("built-in") else Path(name_or_path).stem
     return parse_matrix(document, source=source, default_name=default_name)
 
 
-def _read_matrix_text(name_or_path: str) -> tuple[str, str, str]:
-    path = Path(name_or_path)
-    built_ins = built_in_matrices()
-    if name_or_path in built_ins and not path.exists():
-        text = (BUILT_IN_DIRECTORY / f"{name_or_path}.toml").read_text(encoding="utf-8")
-        return text, f"built-in matrix {name_or_path!r}", name_or_path
-    if path.is_file():
+def with_run_timeout(matrix: Matrix, run_timeout_s: float | None) -> Matrix:
+    """``matrix`` with its per-run time limit replaced by ``run_timeout_s`` (``--run-timeout``) when given."""
+    if run_timeout_s is None:
+        return matrix
+    message = run_timeout_problem(run_timeout_s, "--run-timeout")
+    if message:
+        raise InputError(message)
+    return dataclasses.replace(matrix, run_timeout_s=float(run_timeout_s))
+
+
+def _plugin_problems(plugins: list[str]) -> list[str]:
+    """Import each plug-in module; one message per module that fails to import or registers no integrator."""
+    from foucault_bench.integrators import REGISTRY
+
+    problems = []
+    for module_name in plugins:
         try:
-            return path.read_text(encoding="utf-8"), str(path), path.stem
-        except (OSError, UnicodeDecodeError) as error:
-            raise InputError(f"{path}: cannot read the matrix file: {error}") from None
-    raise InputError(
-        f"matrix {name_or_path!r} is neither a readable file nor a built-in matrix"
-        f"{_suggestion(name_or_path, built_ins)}; built-in matrices: {', '.join(built_ins)}"
-    )
+            importlib.import_module(module_name)
+        except BaseException as error:  # noqa: BLE001 - a plug-in's failure (even sys.exit) is a problem to report
+            problems.append(f"plugins: cannot import {module_name!r}: {type(error).__name__}: {error}")
+            continue
+        own = [name for name, integrator in REGISTRY.items()
+               if getattr(integrator, "__module__", "") == module_name
+               or getattr(integrator, "__module__", "").startswith(f"{module_name}.")]
+        if not own:
+            problems.append(f"plugins: {module_name!r} registers no integrator (a plug-in module must "
+                            "register at least one with integrators.register)")
+    return problems
 
 
 def parse_matrix(document: dict[str, Any], *, source: str = "matrix", default_name: str = "matrix") -> Matrix:
-    """Validate a parsed matrix document (see the module docstring); raise ``InputError`` with every problem."""
+    """Validate a parsed matrix document (see the module docstring); raise ``InputError`` with every problem.
+
+    Everything but the integrator names is checked first; only if that is clean are the plug-ins imported
+    (importing runs their code) and the integrator names checked against the registry they extend."""
+    plugins = _string_list(document, "plugins", lambda message: None, required=False)
+    first = _validate(document, source, default_name, known_later=bool(plugins))
+    if plugins:
+        problems = [f"{source}: {message}" for message in _plugin_problems(plugins)]
+        if problems:
+            raise InputError(problems)
+        return _validate(document, source, default_name, known_later=False)
+    return first
+
+
+def _validate(document: dict[str, Any], source: str, default_name: str, known_later: bool) -> Matrix:
+    """One pass of ``parse_matrix``; with ``known_later`` unknown integrator names are not reported (a plug-in
+    not imported yet may register them) and nothing that needs them is computed."""
     problems: list[str] = []
 
     def problem(message: str) -> None:
@@ -159,7 +195,7 @@ def parse_matrix(document: dict[str, Any], *, source: str = "matrix", default_na
 
     for key in document:
         if key not in TOP_LEVEL_KEYS:
-            problem(f"unknown key {key!r}{_suggestion(key, TOP_LEVEL_KEYS)}; allowed keys: {', '.join(TOP_LEVEL_KEYS)}")
+            problem(f"unknown key {key!r}{suggestion(key, TOP_LEVEL_KEYS)}; allowed keys: {', '.join(TOP_LEVEL_KEYS)}")
 
     name = document.get("name", default_name)
     if not isinstance(name, str) or not name:
@@ -169,17 +205,13 @@ def parse_matrix(document: dict[str, Any], *, source: str = "matrix", default_na
         problem(f"description must be a string, got {description!r}")
 
     plugins = _string_list(document, "plugins", problem, required=False)
-    for module_name in plugins:
-        try:
-            importlib.import_module(module_name)
-        except Exception as error:  # any import failure of user code is a problem to report, not a crash
-            problem(f"plugins: cannot import {module_name!r}: {type(error).__name__}: {error}")
-
     scenes = _release_azimuth_variants(_scenes(document, problem), document.get("release_azimuth_deg"), problem)
-    timing = _timing(document.get("timing", {}), problem)
-    runs = _runs(document, scenes, plugins, timing, problem)
+    timing, run_timeout_s = _timing(document.get("timing", {}), problem)
+    runs = _runs(document, scenes, plugins, timing, problem, known_later)
     if problems:
         raise InputError(problems)
+    if known_later:
+        return None  # type: ignore[return-value]  # the second pass builds the matrix
     return Matrix(
         name=name,
         description=description,
@@ -188,12 +220,8 @@ def parse_matrix(document: dict[str, Any], *, source: str = "matrix", default_na
         runs=tuple(runs),
         plugins=tuple(plugins),
         timing=timing,
+        run_timeout_s=run_timeout_s,
     )
-
-
-def _suggestion(word: str, choices: Any) -> str:
-    close = difflib.get_close_matches(str(word), [str(choice) for choice in choices], n=1)
-    return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 def _string_list(document: dict[str, Any], key: str, problem, *, required: bool) -> list[str]:
@@ -205,7 +233,7 @@ def _string_list(document: dict[str, Any], key: str, problem, *, required: bool)
     if not isinstance(value, list) or not all(isinstance(item, str) for item in value):
         problem(f"{key} must be a list of strings, got {value!r}")
         return []
-    duplicates = sorted({item for item in value if value.count(item) > 1})
+    duplicates = sorted(item for item, count in Counter(value).items() if count > 1)
     if duplicates:
         problem(f"{key}: listed more than once: {', '.join(duplicates)}")
     return list(dict.fromkeys(value))
@@ -217,7 +245,7 @@ def _scenes(document: dict[str, Any], problem) -> list[Scene]:
         if name in SCENES:
             scenes.append(SCENES[name])
         else:
-            problem(f"scenes: unknown scene {name!r}{_suggestion(name, SCENES)}; built-in scenes: {', '.join(SCENES)}")
+            problem(f"scenes: unknown scene {name!r}{suggestion(name, SCENES)}; built-in scenes: {', '.join(SCENES)}")
     inline = document.get("scene", {})
     if not isinstance(inline, dict):
         problem(f"scene must be a table of inline scenes ([scene.NAME]), got {inline!r}")
@@ -239,14 +267,25 @@ def _scenes(document: dict[str, Any], problem) -> list[Scene]:
     return scenes
 
 
+def run_timeout_problem(value: Any, where: str) -> str | None:
+    """Why ``value`` is not a usable per-run time limit (a finite number of seconds > 0), or ``None``."""
+    if not is_number(value) or not math.isfinite(value) or value <= 0:
+        return f"{where} must be a finite number of seconds > 0, got {_short(value)}"
+    return None
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:20]}…({len(text)} characters)"
+
+
 def _release_azimuth_variants(scenes: list[Scene], azimuths: Any, problem) -> list[Scene]:
     """With ``release_azimuth_deg = [ψ₁, ψ₂, …]``, every scene once per release azimuth (degrees from x = South
     towards y = East), named ``SCENE-azψ``; without it, the scenes as they are."""
     if azimuths is None:
         return scenes
     if (not isinstance(azimuths, list) or not azimuths
-            or not all(isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-                       for value in azimuths)):
+            or not all(is_number(value) and math.isfinite(value) for value in azimuths)):
         problem(f"release_azimuth_deg must be a non-empty list of finite numbers (degrees), got {azimuths!r}")
         return scenes
     if len(set(azimuths)) != len(azimuths):
@@ -262,25 +301,36 @@ def _release_azimuth_variants(scenes: list[Scene], azimuths: Any, problem) -> li
     ]
 
 
-def _timing(table: Any, problem) -> TimingPolicy:
+def _timing(table: Any, problem) -> tuple[TimingPolicy, float]:
     if not isinstance(table, dict):
         problem(f"timing must be a table, got {table!r}")
-        return TimingPolicy()
+        return TimingPolicy(), DEFAULT_RUN_TIMEOUT_S
     values: dict[str, Any] = {}
     defaults = TimingPolicy()
+    run_timeout_s = DEFAULT_RUN_TIMEOUT_S
     for key, value in table.items():
         if key not in TIMING_KEYS:
-            problem(f"timing: unknown key {key!r}{_suggestion(key, TIMING_KEYS)}; allowed keys: {', '.join(TIMING_KEYS)}")
+            problem(f"timing: unknown key {key!r}{suggestion(key, TIMING_KEYS)}; allowed keys: {', '.join(TIMING_KEYS)}")
+            continue
+        if key == RUN_TIMEOUT_KEY:
+            message = run_timeout_problem(value, f"timing: {key}")
+            if message:
+                problem(message)
+            else:
+                run_timeout_s = float(value)
             continue
         wanted = type(getattr(defaults, key))
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or (wanted is int and not isinstance(value, int)):
-            problem(f"timing: {key} must be {'an integer' if wanted is int else 'a number'}, got {value!r}")
+        if not is_number(value) or (wanted is int and not isinstance(value, int)):
+            problem(f"timing: {key} must be {'an integer' if wanted is int else 'a number'}, got {_short(value)}")
+            continue
+        if wanted is float and not math.isfinite(value):
+            problem(f"timing: {key} must be finite, got {value!r}")
             continue
         values[key] = wanted(value)
     policy = TimingPolicy(**values)
     for message in policy.problems():
         problem(message)
-    return policy
+    return policy, run_timeout_s
 
 
 def _sweep(value: Any, key: str, where: str, problem) -> list[float]:
@@ -290,31 +340,38 @@ def _sweep(value: Any, key: str, where: str, problem) -> list[float]:
         return []
     accepted: list[float] = []
     for item in value:
-        if isinstance(item, bool) or not isinstance(item, (int, float)):
-            problem(f"{where}: {key} entries must be numbers, got {item!r}")
+        if not is_number(item):
+            problem(f"{where}: {key} entries must be numbers a float can hold, got {_short(item)}")
         elif key == "kh" and not (math.isfinite(item) and item > 0):
             problem(f"{where}: step size must be > 0: kh = {item!r} (kh = k·h, the step in units of 1/k)")
         elif key == "tol" and not 0.0 < item < 1.0:
             problem(f"{where}: tolerance must lie in (0, 1): tol = {item!r}")
+        elif key == "tol" and item < UNIT_ROUNDOFF:
+            problem(f"{where}: tol = {item!r} is below the double-precision unit roundoff 2^-53 ≈ 1.1e-16: "
+                    "no double-precision integrator can meet it")
         else:
             accepted.append(float(item))
-    duplicates = sorted({item for item in accepted if accepted.count(item) > 1})
+    duplicates = sorted(item for item, count in Counter(accepted).items() if count > 1)
     if duplicates:
         problem(f"{where}: {key} lists {', '.join(f'{item:g}' for item in duplicates)} more than once")
     return list(dict.fromkeys(accepted))
 
 
 def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timing: TimingPolicy,
-          problem) -> list[RunSpec]:
+          problem, known_later: bool = False) -> list[RunSpec]:
     from foucault_bench.integrators import REGISTRY  # imported here: plugins must be imported first
 
     names = _string_list(document, "integrators", problem, required=True)
+    if "integrators" in document and isinstance(document["integrators"], list) and not document["integrators"]:
+        problem("integrators: the list is empty; name at least one integrator")
     integrators = []
     for name in names:
         if name == REFERENCE_INTEGRATOR:
             problem(f"integrators: {name} computes the references (bench.problems.reference) and is not swept")
+        elif name not in REGISTRY and known_later:
+            continue
         elif name not in REGISTRY:
-            problem(f"integrators: unknown integrator {name!r}{_suggestion(name, REGISTRY)}; "
+            problem(f"integrators: unknown integrator {name!r}{suggestion(name, REGISTRY)}; "
                     f"known integrators: {', '.join(sorted(set(REGISTRY) - {REFERENCE_INTEGRATOR}))}")
         else:
             integrators.append(REGISTRY[name])
@@ -328,22 +385,29 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
     for name, table in overrides.items():
         where = f"override.{name}"
         if name not in names:
-            problem(f"{where}: {name!r} is not listed in integrators{_suggestion(name, names)}")
+            problem(f"{where}: {name!r} is not listed in integrators{suggestion(name, names)}")
             continue
         if not isinstance(table, dict):
             problem(f"{where} must be a table with kh or tol, got {table!r}")
             continue
         for key, value in table.items():
             if key not in SETTING_KEYS:
-                problem(f"{where}: unknown key {key!r}{_suggestion(key, SETTING_KEYS)}; allowed keys: kh, tol")
+                problem(f"{where}: unknown key {key!r}{suggestion(key, SETTING_KEYS)}; allowed keys: kh, tol")
             else:
                 own.setdefault(name, {})[key] = _sweep(value, key, where, problem)
 
     for where, sweeps in [("kh", shared), *((f"override.{name}", table) for name, table in own.items())]:
         _check_steps_fit(sweeps.get("kh", []), where, scenes, problem)
+        _check_work(sweeps.get("kh", []), where, scenes, problem)
+    for scene in scenes:
+        if scene.n_intervals + 1 > MAX_OUTPUT_POINTS:
+            problem(f"scene {scene.name!r}: its output grid has {scene.n_intervals + 1:.3g} points, more than "
+                    f"{MAX_OUTPUT_POINTS:.0e} (duration_s / output_interval_s): raise output_interval_s")
 
     used = set()
     runs: list[RunSpec] = []
+    if known_later:
+        return runs
     code = code_version(tuple(plugins))
     for integrator in integrators:
         right, wrong = ("tol", "kh") if integrator.adaptive else ("kh", "tol")
@@ -368,6 +432,7 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
                     plugins=tuple(plugins),
                     timing=timing,
                     code_version=code,
+                    declared=tuple(declared_facts(integrator).items()),
                 ))
     for key in shared:
         if key not in used and integrators:
@@ -387,42 +452,12 @@ def _check_steps_fit(kh_values: list[float], where: str, scenes: list[Scene], pr
                     f"{scene.name!r} allows: a step is at most one output interval, kh <= k·Δ = {largest:.4g}")
 
 
-@functools.lru_cache(maxsize=1)
-def git_commit() -> str | None:
-    """HEAD commit of the source tree the package is imported from, with ``+dirty`` for uncommitted
-    changes to tracked files; ``None`` outside a git checkout (provenance only, not part of run keys)."""
-    try:
-        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=PACKAGE_ROOT, capture_output=True, text=True,
-                                timeout=10)
-        if commit.returncode != 0:
-            return None
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=PACKAGE_ROOT,
-                               capture_output=True, text=True, timeout=10)
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return commit.stdout.strip() + ("+dirty" if dirty.stdout.strip() else "")
-
-
-@functools.lru_cache(maxsize=None)
-def code_version(plugins: tuple[str, ...] = ()) -> str:
-    """SHA-256 (16 hex digits) of the package version and of every source file that determines a row's
-    numbers (``NUMBER_SOURCES``, the matrix's plug-in modules and the entry-point plug-ins loaded by
-    ``foucault_bench.integrators``; a plug-in package with all its modules): a stored row is reused by
-    ``--resume`` only when none of them changed, committed or not."""
-    from foucault_bench.integrators.registry import ENTRY_POINT_MODULES
-
-    try:
-        package = version("foucault-bench")
-    except PackageNotFoundError:
-        package = "unknown"
-    digest = hashlib.sha256(package.encode())
-    paths = sorted({path for pattern in NUMBER_SOURCES for path in PACKAGE_ROOT.glob(pattern)})
-    for module_name in (*plugins, *ENTRY_POINT_MODULES):
-        spec = importlib.util.find_spec(module_name)
-        if spec is not None and spec.origin and spec.origin not in ("built-in", "frozen"):
-            origin = Path(spec.origin)
-            paths += sorted(origin.parent.rglob("*.py")) if spec.submodule_search_locations else [origin]
-    for path in paths:
-        digest.update(path.name.encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:16]
+def _check_work(kh_values: list[float], where: str, scenes: list[Scene], problem) -> None:
+    """Refuse a fixed step that needs more than ``MAX_STEPS`` steps: duration·k/kh in a scene."""
+    for scene in scenes:
+        k = scene.params.pendulum_frequency_rad_s
+        for value in kh_values:
+            steps = scene.duration_s * k / value
+            if steps > MAX_STEPS:
+                problem(f"{where}: kh = {value:g} needs about {steps:.2g} steps in scene {scene.name!r} "
+                        f"(duration {scene.duration_s:g} s · k {k:.4g} rad/s / kh), more than {MAX_STEPS:.0e}")

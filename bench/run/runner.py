@@ -3,54 +3,83 @@
 Order of work (``run_matrix``):
 
 1. open a matrix run in the results store (``--resume`` continues the latest one with the same matrix hash
-   and skips the run keys it already holds);
+   and skips the run keys it already holds); the matrix run is locked while this process writes to it;
 2. per scene, in the workers: the reference (``bench.problems.reference.reference_for``, cached on disk) and the
    model-adequacy rows (``bench.problems.adequacy.model_adequacy``), stored in the ``adequacy`` table; a scene whose
    reference cannot be computed has all its runs stored as ``failed`` rows with the reason;
 3. every run (``execute_run``): the integrator's ``solve`` on the scene's problem (the scene's output grid,
-   identical for every integrator; fixed-step runs stream their step-wise metrics and never store steps),
-   timed by the protocol of ``bench.run.timing``, verdicts from ``bench.verdicts.columns.compute_verdicts`` on the
-   warm-up call's solution; the row is written as soon as the run finishes.
+   identical for every integrator), timed by the protocol of ``bench.run.timing``; the timed call does the
+   same work for every integrator, integrate to the output grid (``monitor=False``: no event detection, no
+   streamed metrics); turning points and energies are computed from the grid afterwards, by one procedure for
+   all (``bench.verdicts.columns.compute_verdicts``). Integrators that stream a verdict ingredient the grid
+   cannot give (``Integrator.streams_step_metrics``: the fixed-step loops' per-step energy error) make one
+   extra, untimed ``monitor=True`` call, whose states must equal the timed ones; the row is written as soon as
+   the run finishes.
 
-Nothing is lost when one run fails: an exception anywhere in a run (solver, verdicts, a plug-in) becomes a
-``failed`` row with the reason, and a worker process that dies (a crash in a native library, the OOM killer)
-is replaced; the runs that were in flight are retried one at a time in a fresh worker, and the one that kills
-its worker again is stored as ``failed``.
+Nothing is lost when one run fails (bench/README.md, "Nothing is lost"):
 
-Workers: ``jobs`` processes started with the ``spawn`` method (forking a process that has started numba's,
-LLVM's or TBB's threads is unsafe), each made single-threaded by ``bench.run.timing.limit_threads`` before it
-imports numpy, so that timings do not depend on how many runs share the machine's cores. Longer runs are
-started first (adaptive before fixed-step, longer scenes and finer settings first), which shortens the tail.
+* anything a run raises, ``BaseException`` included (``SystemExit``, a ``KeyboardInterrupt`` raised by a
+  plug-in), and any malformed result (a counter that is not a non-negative integer, a state of the wrong
+  shape) becomes a ``failed`` row with the reason;
+* a run past its time limit (``Matrix.run_timeout_s``) is stopped, stored with status ``timeout`` and the limit
+  in its message, and its worker replaced (``bench.run.executors``);
+* a worker process that dies (a crash in native code, the OOM killer) is replaced; its run is retried once in
+  a fresh worker, and stored as ``failed`` if it kills that one too;
+* only a signal to this process stops the matrix: SIGINT (exit 130) or SIGTERM (exit 143) mark the matrix run
+  ``interrupted`` and end the workers; a second signal ends everything at once. A Dask cluster that goes
+  away stops the matrix the same way (``bench.errors.RunInterrupted``); ``--resume`` completes it.
+
+Start-up: the executor starts its workers at once (``bench.run.executors``), and they import the numerical
+libraries while the main process reads and validates the matrix; this module imports no numerical library at
+the top, so the main process pays only for what it uses (the matrix, the store). Longer runs are started
+first (adaptive before fixed-step, longer scenes and finer settings first), which shortens the tail.
 """
 
 from __future__ import annotations
 
 import collections
-import concurrent.futures
+import contextlib
 import importlib
-import multiprocessing
+import math
+import numbers
+import os
+import signal
 import sys
-import traceback
-from concurrent.futures.process import BrokenProcessPool
+import threading
 from dataclasses import dataclass
-from typing import Any, Callable, Iterator
+from typing import TYPE_CHECKING, Any, Iterator
 
 from tqdm import tqdm
 
-from foucault_bench.bench.problems.adequacy import model_adequacy
-from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.run.matrix import Matrix, RunSpec
-from foucault_bench.bench.problems.reference import reference_for
-from foucault_bench.bench.schema import COLUMN_NAMES, VERDICT_COLUMNS
-from foucault_bench.bench.problems.scenes import Scene
-from foucault_bench.bench.run.store import ResultsStore
+from foucault_bench.bench.errors import RunInterrupted
+from foucault_bench.bench.run.executors import WORKER_DIED, DaskExecutor, LocalExecutor, make_executor
 from foucault_bench.bench.run.timing import limit_threads, peak_rss_mb, time_repeated
-from foucault_bench.bench.verdicts.columns import compute_verdicts
-from foucault_bench.integrators import STATUS_FAILED, STATUS_OK, get_integrator
+from foucault_bench.bench.run.worker import describe
+from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS, STATUS_TIMEOUT, VERDICT_COLUMNS
 
+if TYPE_CHECKING:  # the main process imports this module before its workers start: no numerical library here
+    from foucault_bench.bench.problems.scenes import Scene
+    from foucault_bench.bench.run.matrix import Matrix, RunSpec
+    from foucault_bench.bench.run.store import ResultsStore
+
+__all__ = ["WORKER_DIED", "Terminated", "execute_run", "make_executor", "prepare_scene", "run_matrix"]
+
+STATUS_OK, STATUS_DIVERGED, STATUS_FAILED = "ok", "diverged", "failed"  # integrators.base, not imported here
 NOT_DETERMINISTIC = "warning: the output differed between repeated calls (not deterministic)"
-DASK_CONNECT_TIMEOUT_S = 10.0
-WORKER_DIED = "the worker process died during this run (crash in native code or killed, e.g. out of memory)"
+SOLUTION_STATUSES = (STATUS_OK, STATUS_DIVERGED, STATUS_FAILED)
+COUNTERS = ("nfev", "njev", "steps", "rejected_steps")
+_SQL_KINDS = {"TEXT": (str,), "REAL": (numbers.Real,), "INTEGER": (numbers.Integral,)}
+_PLAIN = {"TEXT": str, "REAL": float, "INTEGER": int}
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM received: handled like Ctrl-C (the matrix run is marked ``interrupted``), exit status 143."""
+
+    exit_status = 128 + signal.SIGTERM
+
+
+class MalformedResult(ValueError):
+    """An integrator returned something that is not a valid ``Solution`` of its problem."""
 
 
 @dataclass(frozen=True)
@@ -63,30 +92,27 @@ class SceneReady:
     adequacy_error: str | None
 
 
-def _import_plugins(plugins: tuple[str, ...]) -> None:
+def import_plugins(plugins: tuple[str, ...]) -> None:
+    """Import the plug-in modules (they register integrators when imported)."""
     for module_name in plugins:
         importlib.import_module(module_name)
 
 
-def _describe(error: BaseException) -> str:
-    """``Type: message (file:line)`` of the innermost frame, short enough for a table cell."""
-    frames = traceback.extract_tb(error.__traceback__)
-    where = f" ({frames[-1].filename.rsplit('/', 1)[-1]}:{frames[-1].lineno})" if frames else ""
-    return f"{type(error).__name__}: {error}{where}"
-
-
 def prepare_scene(scene: Scene, plugins: tuple[str, ...] = ()) -> SceneReady:
     """Compute (or load from the disk cache) the scene's reference and its model-adequacy rows."""
+    from foucault_bench.bench.problems.adequacy import model_adequacy
+    from foucault_bench.bench.problems.reference import reference_for
+
     limit_threads()
-    _import_plugins(plugins)
+    import_plugins(plugins)
     try:
         reference_for(scene)
-    except Exception as error:  # reported, and the scene's runs become failed rows
-        return SceneReady(scene.name, [], f"reference failed: {_describe(error)}", None)
+    except BaseException as error:  # noqa: BLE001 - reported, and the scene's runs become failed rows
+        return SceneReady(scene.name, [], f"reference failed: {describe(error)}", None)
     try:
         return SceneReady(scene.name, list(model_adequacy(scene)), None, None)
-    except Exception as error:  # adequacy is a side table; the runs do not depend on it
-        return SceneReady(scene.name, [], None, f"model adequacy failed: {_describe(error)}")
+    except BaseException as error:  # noqa: BLE001 - adequacy is a side table; the runs do not depend on it
+        return SceneReady(scene.name, [], None, f"model adequacy failed: {describe(error)}")
 
 
 def base_row(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
@@ -104,52 +130,107 @@ def base_row(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
         duration_s=spec.scene.duration_s,
         message="",
     )
+    row.update(spec.declared)  # the integrator's declared facts (bench.schema.DECLARED_FACTS)
     return row
+
+
+def check_solution(solution: Any, n_out: int) -> None:
+    """Raise ``MalformedResult`` unless ``solution`` is a ``Solution`` the row can be built from: a known
+    status, a string message, a finite float state of shape (n_out, 4), counters ``None`` or non-negative
+    integers, a step size ``None`` or a positive finite number."""
+    import numpy as np
+
+    from foucault_bench.integrators import Solution
+
+    if not isinstance(solution, Solution):
+        raise MalformedResult(f"solve returned a {type(solution).__name__}, not a Solution")
+    if solution.status not in SOLUTION_STATUSES:
+        raise MalformedResult(f"status {solution.status!r} is not one of {', '.join(SOLUTION_STATUSES)}")
+    if not isinstance(solution.message, str):
+        raise MalformedResult(f"message is a {type(solution.message).__name__}, not a string")
+    y = solution.y
+    if not isinstance(y, np.ndarray) or y.shape != (n_out, 4) or not np.issubdtype(y.dtype, np.floating):
+        shape = getattr(y, "shape", type(y).__name__)
+        raise MalformedResult(f"state y must be a float array of shape ({n_out}, 4), got {shape}")
+    for name in COUNTERS:
+        value = getattr(solution, name)
+        if value is None:
+            continue
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 0:
+            raise MalformedResult(f"{name} must be a non-negative integer or None, got {value!r}")
+    step = solution.step_size_s
+    if step is not None and not (isinstance(step, (int, float, np.floating)) and not isinstance(step, bool)
+                                 and math.isfinite(step) and step > 0):
+        raise MalformedResult(f"step_size_s must be a positive finite number or None, got {step!r}")
 
 
 def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
     """Run one matrix entry and return its row (``bench.schema.COLUMNS``). Never raises."""
+    from foucault_bench.bench.problems.reference import reference_for
+    from foucault_bench.bench.verdicts.columns import compute_verdicts
+    from foucault_bench.integrators import Solution, get_integrator
+
     limit_threads()
     row = base_row(spec, matrix_id)
     stage = "setup"
     try:
-        _import_plugins(spec.plugins)
+        import_plugins(spec.plugins)
         integrator = get_integrator(spec.integrator)
         row["family"] = integrator.family
         scene = spec.scene
         problem = scene.problem()
-        row["n_out"] = int(problem.t_out.size)
+        n_out = int(problem.t_out.size)
+        row["n_out"] = n_out
         row["energy_conserved"] = int(problem.model.conserves_energy)
         stage = "solve"
-        first, last, timing = time_repeated(
-            lambda: integrator.solve(problem, step_s=spec.step_s, tol=spec.tol, monitor=True),
-            spec.timing,
-            accept=lambda solution: solution.status == STATUS_OK,
-        )
-        row.update(
-            status=first.status,
-            message=first.message,
-            nfev=first.nfev,
-            njev=first.njev,
-            steps=first.steps,
-            rejected_steps=first.rejected_steps,
-        )
+
+        def solve(monitor: bool) -> Solution:
+            solution = integrator.solve(problem, step_s=spec.step_s, tol=spec.tol, monitor=monitor)
+            check_solution(solution, n_out)
+            return solution
+
+        timed, last, timing = time_repeated(lambda: solve(False), spec.timing,
+                                            accept=lambda solution: solution.status == STATUS_OK)
+        first = solve(True) if integrator.streams_step_metrics else timed  # untimed: + per-step metrics
+        row.update(status=first.status, message=first.message,
+                   **{name: None if getattr(first, name) is None else int(getattr(first, name)) for name in COUNTERS})
         if first.step_size_s is not None and spec.kh is not None:  # the loop may shorten the requested step
-            row["step_s"] = first.step_size_s
-            row["kh"] = first.step_size_s * scene.params.pendulum_frequency_rad_s
+            row["step_s"] = float(first.step_size_s)
+            row["kh"] = row["step_s"] * scene.params.pendulum_frequency_rad_s
         if timing is not None:
-            row.update(wall_time_s=timing.median_s, wall_time_spread_s=timing.spread_s, repeats=timing.repeats,
+            row.update(cpu_time_s=timing.cpu_median_s, cpu_time_spread_s=timing.cpu_spread_s,
+                       wall_time_s=timing.median_s, wall_time_spread_s=timing.spread_s, repeats=timing.repeats,
                        compile_time_s=timing.compile_s)
-            if first.y.tobytes() != last.y.tobytes():
+            if not first.y.tobytes() == timed.y.tobytes() == last.y.tobytes():
                 row["message"] = "; ".join(filter(None, [row["message"], NOT_DETERMINISTIC]))
         stage = "verdicts"  # also for diverged runs: energy and trajectory gaps up to the divergence
         verdicts = compute_verdicts(scene, first, reference_for(scene))
         row.update({name: value for name, value in verdicts.items() if name in COLUMN_NAMES})
-    except Exception as error:  # one run's failure is a row, never a crash of the matrix
+    except BaseException as error:  # noqa: BLE001 - one run's failure is a row, never the end of the matrix
         row.update({name: None for name in VERDICT_COLUMNS})
-        row.update(status=STATUS_FAILED, message=f"{stage}: {_describe(error)}", precession_rate_rad_s=None)
+        row.update(status=STATUS_FAILED, message=f"{stage}: {describe(error)}", precession_rate_rad_s=None)
     row["peak_rss_mb"] = peak_rss_mb()
     return row
+
+
+def checked_row(row: Any, spec: RunSpec, matrix_id: str) -> dict[str, Any]:
+    """``row`` if every value fits its column (``bench.schema.COLUMNS``), else a ``failed`` row naming the
+    first value that does not: a row that reached the main process is always storable."""
+    if not isinstance(row, dict) or set(row) - set(COLUMN_NAMES) or row.get("run_key") != spec.run_key:
+        return run_failure(spec, matrix_id, STATUS_FAILED, f"malformed row: {type(row).__name__} {row!r:.80}")
+    plain = {}
+    for column in COLUMNS:
+        value = row.get(column.name)
+        try:
+            if value is not None and (isinstance(value, bool) or not isinstance(value, _SQL_KINDS[column.sql_type])):
+                raise TypeError
+            plain[column.name] = None if value is None else _PLAIN[column.sql_type](value)  # numpy scalars too
+            if column.sql_type == "INTEGER" and value is not None and abs(plain[column.name]) >= 2**63:
+                raise OverflowError
+        except (TypeError, ValueError, OverflowError):
+            return run_failure(spec, matrix_id, STATUS_FAILED,
+                               f"malformed result: {column.name} = {value!r:.80} is not {column.sql_type}")
+    return plain
 
 
 def _estimated_cost(spec: RunSpec) -> tuple:
@@ -159,112 +240,47 @@ def _estimated_cost(spec: RunSpec) -> tuple:
     return (spec.kh is not None, -periods, -fineness)
 
 
-# --- executors ------------------------------------------------------------------------------------------------
+def scene_failure(scene: Scene, plugins: tuple[str, ...], status: str, reason: str) -> SceneReady:
+    """What preparing a scene gave when its worker died or its task failed."""
+    return SceneReady(scene.name, [], f"reference failed: {reason}", None)
 
 
-class LocalExecutor:
-    """``jobs`` single-threaded worker processes (spawn), replaced when one dies (see the module docstring)."""
-
-    scheduler = None
-
-    def __init__(self, jobs: int):
-        self.jobs = jobs
-        self.pool = self._new_pool(jobs)
-
-    @staticmethod
-    def _new_pool(workers: int) -> concurrent.futures.ProcessPoolExecutor:
-        return concurrent.futures.ProcessPoolExecutor(
-            max_workers=workers, mp_context=multiprocessing.get_context("spawn"), initializer=limit_threads)
-
-    def map_unordered(self, function: Callable, tasks: list[tuple], on_worker_death: Callable) -> Iterator:
-        """Yield ``function(*task)`` for every task as results arrive, at most ``jobs`` in flight. A task whose
-        worker died is retried alone in a fresh worker; if it kills that one too, ``on_worker_death(*task)``
-        is yielded in its place."""
-        waiting = collections.deque(tasks)
-        in_flight: dict[concurrent.futures.Future, tuple] = {}
-        while waiting or in_flight:
-            while waiting and len(in_flight) < self.jobs:
-                task = waiting.popleft()
-                in_flight[self.pool.submit(function, *task)] = task
-            done, _ = concurrent.futures.wait(in_flight, return_when=concurrent.futures.FIRST_COMPLETED)
-            suspects = []
-            for future in done:
-                task = in_flight.pop(future)
-                try:
-                    yield future.result()
-                except BrokenProcessPool:
-                    suspects.append(task)
-            if suspects:  # the whole pool is broken: every task still in flight is lost with it
-                suspects.extend(in_flight.values())
-                in_flight.clear()
-                self.pool.shutdown(wait=True, cancel_futures=True)
-                yield from self._run_alone(function, suspects, on_worker_death)
-                self.pool = self._new_pool(self.jobs)
-
-    def _run_alone(self, function: Callable, tasks: list[tuple], on_worker_death: Callable) -> Iterator:
-        for task in tasks:
-            with self._new_pool(1) as pool:
-                try:
-                    yield pool.submit(function, *task).result()
-                except BrokenProcessPool:
-                    yield on_worker_death(*task)
-
-    def close(self) -> None:
-        self.pool.shutdown(wait=True, cancel_futures=True)
-
-
-class DaskExecutor:
-    """The same work on a Dask distributed cluster (``dask.distributed.Client``). Dask retries a task whose
-    worker died on another worker and gives up with ``KilledWorker`` (its ``allowed-failures`` setting);
-    that error, like any other raised by a task, becomes ``on_worker_death``."""
-
-    def __init__(self, address: str):
-        from distributed import Client
-
-        try:
-            self.client = Client(address, timeout=f"{DASK_CONNECT_TIMEOUT_S}s", set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as error:
-            raise InputError(f"--scheduler: cannot connect to the Dask scheduler at {address!r}: {error}") from None
-        self.scheduler = address
-
-    def map_unordered(self, function: Callable, tasks: list[tuple], on_worker_death: Callable) -> Iterator:
-        from distributed import as_completed
-
-        futures = {
-            self.client.submit(function, *task, pure=False, priority=len(tasks) - index): task
-            for index, task in enumerate(tasks)
-        }
-        for future in as_completed(futures, loop=self.client.loop):
-            try:
-                yield future.result()
-            except Exception as error:  # KilledWorker, lost connection: a row, not a crash
-                yield on_worker_death(*futures[future], reason=_describe(error))
-            finally:
-                future.release()
-
-    def close(self) -> None:
-        self.client.close()
+def run_failure(spec: RunSpec, matrix_id: str, status: str, reason: str) -> dict[str, Any]:
+    """The row of a run that could not be executed or finished: its worker died, it passed its time limit
+    (``status`` = timeout) or its scene has no reference."""
+    row = base_row(spec, matrix_id)
+    row.update(status=status, message=reason)
+    return row
 
 
 # --- the matrix run -------------------------------------------------------------------------------------------
 
 
-def _scene_failure(scene: Scene, plugins: tuple[str, ...], reason: str = WORKER_DIED) -> SceneReady:
-    """What preparing a scene gave when its worker died or Dask gave up on it."""
-    return SceneReady(scene.name, [], f"reference failed: {reason}", None)
+@contextlib.contextmanager
+def _stop_on_signals(executor: LocalExecutor | DaskExecutor) -> Iterator[None]:
+    """SIGINT raises ``KeyboardInterrupt`` and SIGTERM ``Terminated`` in the main thread; while the matrix run
+    is being closed after that, a second SIGINT or SIGTERM kills the workers and exits at once."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
 
+    def at_once(signum: int, frame: Any) -> None:
+        executor.kill_now()
+        os._exit(128 + signum)
 
-def _run_failure(spec: RunSpec, matrix_id: str, reason: str = WORKER_DIED) -> dict[str, Any]:
-    """The row of a run that could not be executed (its worker died, or its scene has no reference)."""
-    row = base_row(spec, matrix_id)
-    row.update(status=STATUS_FAILED, message=reason)
-    return row
+    def first(signum: int, frame: Any) -> None:
+        signal.signal(signal.SIGINT, at_once)
+        signal.signal(signal.SIGTERM, at_once)
+        raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
 
-
-def make_executor(jobs: int, scheduler: str | None = None) -> LocalExecutor | DaskExecutor:
-    """Local worker processes, or a connection to the Dask scheduler at ``scheduler`` (``InputError`` if it
-    cannot be reached)."""
-    return DaskExecutor(scheduler) if scheduler else LocalExecutor(jobs)
+    previous = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
+    for signum in previous:
+        signal.signal(signum, first)
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def run_matrix(matrix: Matrix, store: ResultsStore, *, jobs: int = 1, executor: LocalExecutor | DaskExecutor |
@@ -272,33 +288,48 @@ def run_matrix(matrix: Matrix, store: ResultsStore, *, jobs: int = 1, executor: 
     """Run ``matrix`` and store one row per run; return the matrix id.
 
     Args:
-        matrix: a validated matrix (``bench.run.matrix.load_matrix``).
+        matrix: a validated matrix (``bench.run.matrix.load_matrix``); its ``run_timeout_s`` bounds every run.
         store: where rows, provenance and adequacy rows go.
         jobs: local worker processes, when no ``executor`` is given.
         executor: where to run (``make_executor``); closed when the matrix run ends.
         resume: continue the latest matrix run with the same matrix hash, skipping stored run keys.
         progress: show progress bars (tqdm, on stderr).
+
+    Raises:
+        KeyboardInterrupt, Terminated: SIGINT or SIGTERM (the matrix run is stored as ``interrupted``).
+        RunInterrupted: the Dask cluster went away (likewise).
+        InputError: the matrix run is locked by another process, or no Dask worker runs this code.
     """
     executor = executor or LocalExecutor(jobs)
-    matrix_id, stored = store.start_matrix_run(
-        matrix, jobs=executor.jobs if executor.scheduler is None else None, scheduler=executor.scheduler,
-        resume=resume)
-    todo = sorted((spec for spec in matrix.runs if spec.run_key not in stored), key=_estimated_cost)
     status = "interrupted"
-    try:
-        needed = [scene for scene in matrix.scenes if any(spec.scene.name == scene.name for spec in todo)]
-        broken = _prepare_scenes(executor, needed, matrix, store, matrix_id, progress)
-        to_execute = []
-        for spec in todo:
-            if spec.scene.name in broken:
-                store.write_run(_run_failure(spec, matrix_id, broken[spec.scene.name]))
+    with _stop_on_signals(executor):
+        try:
+            executor.check_code(matrix)
+            matrix_id, stored = store.start_matrix_run(
+                matrix, jobs=executor.jobs if executor.scheduler is None else None, scheduler=executor.scheduler,
+                resume=resume)
+        except BaseException:
+            executor.kill()
+            raise
+        todo = sorted((spec for spec in matrix.runs if spec.run_key not in stored), key=_estimated_cost)
+        try:
+            needed = [scene for scene in matrix.scenes if any(spec.scene.name == scene.name for spec in todo)]
+            broken = _prepare_scenes(executor, needed, matrix, store, matrix_id, progress)
+            to_execute = []
+            for spec in todo:
+                if spec.scene.name in broken:
+                    store.write_run(run_failure(spec, matrix_id, STATUS_FAILED, broken[spec.scene.name]))
+                else:
+                    to_execute.append(spec)
+            _execute_runs(executor, to_execute, matrix, store, matrix_id, progress,
+                          already=len(todo) - len(to_execute))
+            status = "finished"
+        finally:
+            if status == "finished":
+                executor.close()
             else:
-                to_execute.append(spec)
-        _execute_runs(executor, to_execute, matrix, store, matrix_id, progress, already=len(todo) - len(to_execute))
-        status = "finished"
-    finally:
-        executor.close()
-        store.finish_matrix_run(matrix_id, status)
+                executor.kill()
+            store.finish_matrix_run(matrix_id, status)
     return matrix_id
 
 
@@ -306,9 +337,10 @@ def _prepare_scenes(executor, scenes: list[Scene], matrix: Matrix, store: Result
                     progress: bool) -> dict[str, str]:
     """References and adequacy rows of every scene; returns {scene name: reason} for failed references."""
     broken: dict[str, str] = {}
-    results = executor.map_unordered(prepare_scene, [(scene, matrix.plugins) for scene in scenes], _scene_failure)
+    results = executor.map_unordered(prepare_scene, [(scene, matrix.plugins) for scene in scenes], scene_failure,
+                                     timeout_s=None)
     with tqdm(total=len(scenes), desc="references", unit="scene", disable=not progress, file=sys.stderr) as bar:
-        for ready in results:
+        for _, ready in results:
             if ready.reference_error:
                 broken[ready.scene] = ready.reference_error
                 bar.write(f"scene {ready.scene}: {ready.reference_error}")
@@ -322,11 +354,17 @@ def _prepare_scenes(executor, scenes: list[Scene], matrix: Matrix, store: Result
 def _execute_runs(executor, specs: list[RunSpec], matrix: Matrix, store: ResultsStore, matrix_id: str,
                   progress: bool, already: int) -> None:
     counts = collections.Counter(failed=already)
-    results = executor.map_unordered(execute_run, [(spec, matrix_id) for spec in specs], _run_failure)
+    results = executor.map_unordered(execute_run, [(spec, matrix_id) for spec in specs], run_failure,
+                                     timeout_s=matrix.run_timeout_s)
     with tqdm(total=len(specs), desc=f"{matrix.name} runs", unit="run", disable=not progress,
               file=sys.stderr) as bar:
-        for row in results:
+        for (spec, _), row in results:
+            row = checked_row(row, spec, matrix_id)
             store.write_run(row)
             counts[row["status"]] += 1
-            bar.set_postfix(failed=counts["failed"], diverged=counts["diverged"], refresh=False)
+            bar.set_postfix(failed=counts["failed"], timeout=counts[STATUS_TIMEOUT], diverged=counts["diverged"],
+                            refresh=False)
             bar.update()
+    lost = getattr(executor, "lost_runs", 0)
+    if lost:
+        raise RunInterrupted(f"{lost} run(s) were lost with their Dask workers (not stored; `--resume` runs them)")

@@ -11,13 +11,23 @@ Timing protocol (``time_repeated``), the same for every integrator (defaults: ``
 2. timed repeats of the identical call until at least ``min_repeats`` repeats *and* ``min_total_s`` seconds
    of repeats are done, stopping at ``max_repeats``; when the warm-up call alone took longer than
    ``single_repeat_over_s`` a single timed repeat is made (a run that long is already a stable figure, and
-   three repeats of the slowest library runs would take most of the default matrix's budget);
-3. the cost figures are the median of the repeats, their spread (max − min), and the compile time
-   ``warm-up − median`` (JIT compilation or numba cache load; clipped at 0 because a warm-up that compiles
-   nothing can be faster than the median on a noisy machine).
+   three repeats of the slowest library runs would take most of the default matrix's budget). Both
+   decisions count CPU time (below), so that the number of repeats does not depend on the machine's load;
+   with a single repeat the spread is 0 (nothing to compare it with);
+3. the cost figures are the median of the repeats and their spread (max − min), each for two clocks, and
+   the compile time ``warm-up − median`` in wall time (JIT compilation or numba cache load; clipped at 0
+   because a warm-up that compiles nothing can be faster than the median on a noisy machine).
 
-Times are ``time.perf_counter`` wall-clock seconds (Python docs, ``time.perf_counter``: the highest-resolution
-monotonic clock available).
+Two clocks are read around every timed call:
+
+* **CPU time** (``time.thread_time``: the CPU time of the calling thread, system and user; Python docs,
+  ``time.thread_time``, CLOCK_THREAD_CPUTIME_ID on Linux). It counts only the time the thread computed, not
+  the time it waited for a core, so it does not depend on the machine's load or on how many runs share the
+  cores (``--jobs``). Every integrator computes on the calling thread (the worker's native thread pools are
+  capped at one thread, ``limit_threads``), which is what makes this the run's whole cost; on a Dask worker
+  that runs tasks in threads it is still that task's own thread. This is the cost the reports use.
+* **Wall time** (``time.perf_counter``: the highest-resolution monotonic clock): what a user waits for,
+  CPU time plus waiting; it grows when the machine is loaded.
 """
 
 from __future__ import annotations
@@ -68,10 +78,13 @@ class TimingPolicy:
 
 @dataclass(frozen=True)
 class Timing:
-    """Cost of one run: median and spread of the timed repeats (s), their count, and the compile time (s)."""
+    """Cost of one run: median and spread (max − min) of the timed repeats in wall time and in the thread's CPU
+    time (s), their count, and the compile time (s, wall)."""
 
     median_s: float
     spread_s: float
+    cpu_median_s: float
+    cpu_spread_s: float
     repeats: int
     compile_s: float
 
@@ -84,24 +97,29 @@ def time_repeated(call: Callable[[], Result], policy: TimingPolicy,
     timing; when ``accept(warm-up result)`` is false (a failed or diverged run) no repeat is made and the
     timing is ``None``.
     """
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.thread_time()
     first = call()
+    warm_up_cpu_s = time.thread_time() - cpu_start
     warm_up_s = time.perf_counter() - start
     if not accept(first):
         return first, first, None
-    wanted = 1 if warm_up_s > policy.single_repeat_over_s else policy.min_repeats
+    wanted = 1 if warm_up_cpu_s > policy.single_repeat_over_s else policy.min_repeats
     durations: list[float] = []
+    cpu_durations: list[float] = []
     last = first
     while len(durations) < wanted or (
-        wanted > 1 and sum(durations) < policy.min_total_s and len(durations) < policy.max_repeats
+        wanted > 1 and sum(cpu_durations) < policy.min_total_s and len(durations) < policy.max_repeats
     ):
-        start = time.perf_counter()
+        start, cpu_start = time.perf_counter(), time.thread_time()
         last = call()
+        cpu_durations.append(time.thread_time() - cpu_start)
         durations.append(time.perf_counter() - start)
     median = statistics.median(durations)
     return first, last, Timing(
         median_s=median,
         spread_s=max(durations) - min(durations),
+        cpu_median_s=statistics.median(cpu_durations),
+        cpu_spread_s=max(cpu_durations) - min(cpu_durations),
         repeats=len(durations),
         compile_s=max(0.0, warm_up_s - median),
     )

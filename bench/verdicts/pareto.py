@@ -26,7 +26,7 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 import pandas as pd
 
-from foucault_bench.bench.run.store import setting_label
+from foucault_bench.bench.schema import setting_label
 from foucault_bench.integrators import STATUS_OK
 from foucault_bench.models import MODELS
 

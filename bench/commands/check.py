@@ -1,0 +1,69 @@
+"""``foucault-bench check``: the CI gate — a thresholds file checked on stored rows or on a fresh matrix run.
+
+Exit status 0 when every bound holds, 1 when one fails, 2 on bad input (found before any matrix runs). The
+thresholds file format is described in ``bench.gate.thresholds``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from foucault_bench.bench.commands import options
+from foucault_bench.bench.errors import InputError
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--thresholds", required=True, metavar="FILE",
+                        help="thresholds TOML file, or a built-in name (default)")
+    source = parser.add_mutually_exclusive_group()
+    source.add_argument("--results", metavar="DB", help="check the rows of a stored matrix run in this database")
+    source.add_argument("--matrix", metavar="FILE",
+                        help="run this matrix (built-in name or TOML file) and check it (default: the matrix "
+                             "named in the thresholds file)")
+    parser.add_argument("--matrix-id", metavar="ID",
+                        help="with --results: the stored matrix run to check (id or unique prefix; default: latest)")
+    parser.add_argument("--db", metavar="FILE",
+                        help="when running a matrix: keep its results in this database (default: a temporary one)")
+    parser.add_argument("--jobs", type=int, default=None, help="worker processes when running a matrix "
+                                                               "(default: the cores available)")
+    parser.add_argument("--format", choices=("text", "markdown"), default="text",
+                        help="table format on stdout (markdown for CI job summaries; default: %(default)s)")
+    parser.add_argument("--junit", metavar="FILE", help="also write the checks as JUnit XML")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bars while running a matrix")
+
+
+def main(args: argparse.Namespace) -> int:
+    from foucault_bench.bench.gate.evaluate import evaluate
+    from foucault_bench.bench.gate.render import junit_xml, render
+    from foucault_bench.bench.gate.select import validate_against
+    from foucault_bench.bench.gate.thresholds import load_thresholds
+
+    thresholds = load_thresholds(args.thresholds)
+    if args.matrix_id and not args.results:
+        raise InputError("--matrix-id selects a stored run: give it with --results")
+    if args.db and args.results:
+        raise InputError("--db is where a fresh matrix run is kept; with --results give the database there")
+    if args.results:
+        from foucault_bench.bench.run.store import ResultsStore
+
+        with ResultsStore(args.results, create=False) as store:
+            matrix_id = store.resolve_matrix_id(args.matrix_id)
+            frame = store.frame(matrix_id)
+        what = f"matrix run {matrix_id} in {args.results}"
+    else:
+        from foucault_bench.bench.gate.check import run_for_check
+
+        matrix_name = args.matrix or thresholds.matrix_to_run()
+        if matrix_name is None:
+            raise InputError(f"{thresholds.source} names no matrix: give --results DB or --matrix FILE")
+        frame, what = run_for_check(thresholds, matrix_name, db=args.db, jobs=options.jobs(args.jobs),
+                                    progress=not args.no_progress)
+    validate_against(thresholds, frame, what=what)
+    outcomes = evaluate(thresholds, frame)
+    print(f"checking {thresholds.source} against {what}", file=sys.stderr)
+    print(render(outcomes, markdown=args.format == "markdown"))
+    if args.junit:
+        junit_xml(outcomes, suite=f"{thresholds.source} on {what}").write(args.junit, encoding="utf-8",
+                                                                        xml_declaration=True)
+    return 0 if all(outcome.passed for outcome in outcomes) else 1

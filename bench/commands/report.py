@@ -1,0 +1,40 @@
+"""``foucault-bench report``: build the report folder from a results database (``reports.build``)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from foucault_bench.bench.run.store import DEFAULT_DB  # the store module imports no numerical library
+
+DEFAULT_OUT = Path("results") / "report"
+DEFAULT_TARGETS = (1e-3, 1e-6, 1e-9)
+"""Target reference errors of the matched-accuracy summary (``reports.build.DEFAULT_TARGETS``, kept equal by
+tests/test_cli.py)."""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--db", type=Path, default=DEFAULT_DB, help=f"results database (default {DEFAULT_DB})")
+    parser.add_argument("--matrix-id", default=None, help="matrix run id or unique prefix (default: the latest)")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"report folder (default {DEFAULT_OUT})")
+    parser.add_argument("--studies", choices=("stored", "recompute", "skip"), default="stored",
+                        help="study tables: read from the database and compute missing ones (stored, default), "
+                             "recompute all, or leave the study sections out (skip)")
+    parser.add_argument("--targets", type=float, nargs="+", default=list(DEFAULT_TARGETS), metavar="ERROR",
+                        help="target reference errors of the matched-accuracy summary (default: "
+                             f"{' '.join(f'{t:g}' for t in DEFAULT_TARGETS)})")
+
+
+def main(args: argparse.Namespace) -> int:
+    from foucault_bench.bench.commands.outputs import creatable
+    from foucault_bench.bench.errors import InputError
+
+    problems = [f"--targets: a target error must be a finite number > 0, got {target:g}"
+                for target in args.targets if not (math.isfinite(target) and target > 0)]
+    if problems:
+        raise InputError(problems)
+    creatable(args.out, "--out", folder=True)
+    from foucault_bench.reports.build import write_report
+
+    return write_report(args.db, args.matrix_id, args.out, args.studies, tuple(args.targets))

@@ -1,0 +1,253 @@
+"""Worker processes the runner can end: one task at a time, a time limit per task, gone when their parent goes.
+
+A worker is ``python -m foucault_bench.bench.run.worker PARENT_PID``, a plain subprocess (no
+``multiprocessing``: no resource-tracker process, no shared semaphores) that reads pickled tasks
+``(function, args)`` from its stdin and writes one pickled outcome per task to a private copy of its stdout:
+
+* ``("ok", value)`` when ``function(*args)`` returned,
+* ``("error", reason)`` when it raised anything, ``BaseException`` included (``SystemExit``,
+  ``KeyboardInterrupt`` raised by a plug-in), or when its value could not be pickled.
+
+The parent (``WorkerProcess``) sees a worker that died (a segfault in native code, ``os._exit``, the OOM
+killer) as end-of-file, and ends a worker whose task is past its time limit with ``SIGKILL``, the only way to
+stop a compiled loop that holds the GIL. A worker never outlives its parent:
+
+* on Linux the kernel kills it when the thread that started it ends (``prctl(PR_SET_PDEATHSIG, SIGKILL)``,
+  prctl(2)); workers are started from one long-lived thread (``_SPAWNER``) so that this is the process's life;
+* everywhere, a watchdog thread ends it within ``PARENT_POLL_S`` once its parent pid changes (the watchdog
+  needs the GIL, so it is the fallback where prctl does not exist), and an idle worker ends at end-of-file on
+  stdin or after ``IDLE_EXIT_S`` without a task.
+
+Workers ignore SIGINT and SIGTERM: a Ctrl-C in a terminal reaches the whole process group, and a run
+interrupted that way must not be stored as a failed row; the parent ends its workers itself.
+
+Plug-in output: the worker's file descriptor 1 is pointed at stderr, so a ``print`` in a plug-in (or a native
+library writing to stdout) cannot corrupt the task channel.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import os
+import pickle
+import select
+import signal
+import subprocess
+import sys
+import threading
+import time
+import traceback
+from typing import Any, Callable
+
+PARENT_POLL_S = 0.5
+IDLE_EXIT_S = 60.0
+CLOSE_GRACE_S = 5.0
+PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
+
+WORKER_MODULES = (
+    "heyoka",  # the reference integrator's library: imported before any timed call, never counted as compile time
+    "foucault_bench.integrators",
+    "foucault_bench.bench.problems.reference",
+    "foucault_bench.bench.problems.adequacy",
+    "foucault_bench.bench.verdicts.columns",
+)
+"""What a worker imports to run (``warm_up``, its first task, while the main process validates the matrix)."""
+
+_SPAWNER = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="foucault-bench-spawner")
+"""Starts every worker: its thread lives as long as the process, which is what PR_SET_PDEATHSIG watches."""
+
+
+def write_message(descriptor: int, value: Any) -> None:
+    """Send ``value`` as one message: its pickle's length (8 bytes, big-endian), then the pickle."""
+    payload = pickle.dumps(value)
+    data = memoryview(len(payload).to_bytes(8, "big") + payload)
+    while data:
+        data = data[os.write(descriptor, data):]
+
+
+def read_message(descriptor: int) -> Any:
+    """The next message (``write_message``); ``EOFError`` if the pipe closes first. Reads exactly one message,
+    so that ``select`` on the descriptor still tells whether another one is waiting."""
+    size = int.from_bytes(_read_exactly(descriptor, 8), "big")
+    return pickle.loads(_read_exactly(descriptor, size))
+
+
+def _read_exactly(descriptor: int, size: int) -> bytes:
+    chunks, left = [], size
+    while left:
+        chunk = os.read(descriptor, min(left, 1 << 20))
+        if not chunk:
+            raise EOFError("the pipe closed")
+        chunks.append(chunk)
+        left -= len(chunk)
+    return b"".join(chunks)
+
+
+def describe(error: BaseException) -> str:
+    """``Type: message (file:line)`` of the innermost frame, short enough for a table cell."""
+    frames = traceback.extract_tb(error.__traceback__)
+    where = f" ({frames[-1].filename.rsplit('/', 1)[-1]}:{frames[-1].lineno})" if frames else ""
+    return f"{type(error).__name__}: {error}{where}"
+
+
+def warm_up() -> None:
+    """Import ``WORKER_MODULES``."""
+    import importlib
+
+    for module_name in WORKER_MODULES:
+        importlib.import_module(module_name)
+
+
+class WorkerProcess:
+    """One worker subprocess, seen from its parent."""
+
+    def __init__(self) -> None:
+        command = [sys.executable, "-m", "foucault_bench.bench.run.worker", str(os.getpid())]
+        self.process = _SPAWNER.submit(
+            subprocess.Popen, command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, bufsize=0,
+            close_fds=True).result()
+        self.last_used = time.monotonic()
+        self.code_version: str | None = None  # set by whoever checks it (bench.run.executors.run_isolated)
+        self._send(list(sys.path))  # the worker imports the same modules (what multiprocessing's spawn does)
+
+    @property
+    def pid(self) -> int:
+        return self.process.pid
+
+    def fileno(self) -> int:
+        """The outcome channel, for ``multiprocessing.connection.wait`` or ``select``."""
+        return self.process.stdout.fileno()
+
+    def alive(self) -> bool:
+        return self.process.poll() is None
+
+    def submit(self, function: Callable, args: tuple) -> bool:
+        """Send a task; ``False`` if the worker is gone (nothing was sent)."""
+        if not self._send((function, args)):
+            return False
+        self.last_used = time.monotonic()
+        return True
+
+    def _send(self, value: Any) -> bool:
+        try:
+            write_message(self.process.stdin.fileno(), value)
+        except (OSError, ValueError):  # a closed pipe: the worker is gone
+            return False
+        return True
+
+    def receive(self) -> tuple[str, Any] | None:
+        """The outcome of the task sent last (blocks until it is complete); ``None`` if the worker died."""
+        try:
+            outcome = read_message(self.fileno())
+        except Exception:  # end-of-file or a truncated message: the worker died mid-task
+            return None
+        self.last_used = time.monotonic()
+        return outcome
+
+    def call(self, function: Callable, args: tuple, timeout_s: float | None,
+             stop: Callable[[], bool] = lambda: False) -> tuple[str, Any]:
+        """Run one task and wait for it: ``("ok", value)``, ``("error", reason)``, ``("died", None)``,
+        ``("timeout", None)`` or ``("stopped", None)`` when ``stop()`` became true (polled every second).
+        The worker is killed on a timeout or a stop."""
+        if not self.submit(function, args):
+            return "died", None
+        deadline = None if timeout_s is None else time.monotonic() + timeout_s
+        while True:
+            wait_s = 1.0 if deadline is None else min(1.0, max(0.0, deadline - time.monotonic()))
+            ready, _, _ = select.select([self.process.stdout], [], [], wait_s)
+            if ready:
+                return self.receive() or ("died", None)
+            if deadline is not None and time.monotonic() >= deadline:
+                self.kill()
+                return "timeout", None
+            if stop():
+                self.kill()
+                return "stopped", None
+
+    def kill(self) -> None:
+        """End the worker at once (SIGKILL) and reap it."""
+        if self.alive():
+            self.process.kill()
+        self.process.wait()
+        self._close_pipes()
+
+    def close(self) -> None:
+        """Let an idle worker exit (end-of-file on its stdin), killing it if it has not within a few seconds."""
+        try:
+            self.process.stdin.close()
+        except OSError:
+            pass
+        try:
+            self.process.wait(timeout=CLOSE_GRACE_S)
+        except subprocess.TimeoutExpired:
+            self.kill()
+        self._close_pipes()
+
+    def _close_pipes(self) -> None:
+        for pipe in (self.process.stdin, self.process.stdout):
+            try:
+                pipe.close()
+            except OSError:
+                pass
+
+
+# --- the worker side ------------------------------------------------------------------------------------------
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    """Arrange for this process to end when its parent does (see the module docstring)."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):
+            pass
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    if os.getppid() != parent_pid:  # the parent died before prctl took effect
+        os._exit(1)
+    threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
+
+
+def main(parent_pid: int) -> None:
+    """Serve tasks from stdin until end-of-file (see the module docstring)."""
+    _die_with_parent(parent_pid)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    from foucault_bench.bench.run.timing import limit_threads  # standard library only: before numpy
+
+    limit_threads()
+    tasks, outcomes = os.dup(0), os.dup(1)
+    os.dup2(2, 1)  # stdout writes (plug-ins, native libraries) go to stderr, not into the channel
+    devnull = os.open(os.devnull, os.O_RDONLY)
+    os.dup2(devnull, 0)
+    sys.path[:] = read_message(tasks)  # the parent's (WorkerProcess.__init__)
+    while True:
+        ready, _, _ = select.select([tasks], [], [], IDLE_EXIT_S)
+        if not ready:
+            break
+        try:
+            function, args = read_message(tasks)
+        except EOFError:
+            break
+        try:
+            outcome: tuple[str, Any] = ("ok", function(*args))
+        except BaseException as error:  # noqa: BLE001 - whatever a task raises is its outcome, never the worker's end
+            outcome = ("error", describe(error))
+        try:
+            write_message(outcomes, outcome)
+        except BaseException as error:  # noqa: BLE001 - an unpicklable value is the task's fault too
+            write_message(outcomes, ("error", f"the result could not be sent back: {describe(error)}"))
+    # Every outcome is written: end without tearing down the numerical libraries (0.5-1.2 s per worker,
+    # bench/PERF.md "Start-up"), time the parent would spend waiting for its workers to end.
+    sys.stderr.flush()
+    os._exit(0)
+
+
+if __name__ == "__main__":
+    main(int(sys.argv[1]))

@@ -1,0 +1,427 @@
+"""Bounded, recoverable runs: faulty plug-ins become rows, time limits, signals, the matrix-run lock, read-only
+commands, and matrix validation that refuses absurd or dangerous input before anything runs.
+
+The faulty plug-ins are fixtures: integrators that hang, call ``sys.exit``, raise ``KeyboardInterrupt``,
+return a list as ``nfev`` or a state of the wrong shape, and crash their process with a segfault.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import psutil
+import pytest
+
+from foucault_bench.bench.cli import main as cli_main
+from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.run.matrix import MAX_STEPS, load_matrix, parse_matrix
+from foucault_bench.bench.run.runner import WORKER_DIED, run_matrix
+from foucault_bench.bench.run.store import ResultsStore, compare_runs
+from foucault_bench.integrators import unregister
+
+FAULTY = '''
+"""Test-only integrators that misbehave in every way a plug-in can (registered when imported)."""
+import ctypes
+import sys
+from typing import ClassVar
+
+import numpy as np
+
+from foucault_bench.integrators import register
+from foucault_bench.integrators.adaptive import AdaptiveIntegrator
+from foucault_bench.integrators.base import Solution
+
+
+class _Base(AdaptiveIntegrator):
+    family: ClassVar[str] = "test"
+    order: ClassVar[None] = None
+    reference: ClassVar[str] = "tests/test_robust_runs.py"
+
+
+@register
+class Hangs(_Base):
+    name: ClassVar[str] = "test_hangs"
+
+    def _solve(self, problem, *, step_s, tol, monitor):
+        while True:  # holds the GIL: only ending the process stops it
+            pass
+
+
+@register
+class Exits(_Base):
+    name: ClassVar[str] = "test_exits"
+
+    def solve(self, problem, **settings):
+        sys.exit(3)
+
+    def _solve(self, problem, *, step_s, tol, monitor):
+        raise AssertionError("not reached")
+
+
+@register
+class Interrupts(_Base):
+    name: ClassVar[str] = "test_interrupts"
+
+    def solve(self, problem, **settings):
+        raise KeyboardInterrupt
+
+    def _solve(self, problem, *, step_s, tol, monitor):
+        raise AssertionError("not reached")
+
+
+@register
+class ListAsNfev(_Base):
+    name: ClassVar[str] = "test_list_nfev"
+
+    def _solve(self, problem, *, step_s, tol, monitor):
+        return Solution(t=problem.t_out, y=np.zeros((problem.t_out.size, 4)), nfev=[1, 2, 3], steps=3)
+
+
+@register
+class WrongShape(_Base):
+    name: ClassVar[str] = "test_wrong_shape"
+
+    def _solve(self, problem, *, step_s, tol, monitor):
+        return Solution(t=problem.t_out, y=np.zeros((3, 4)), nfev=1, steps=1)
+
+
+@register
+class Segfaults(_Base):
+    name: ClassVar[str] = "test_segfaults"
+
+    def _solve(self, problem, *, step_s, tol, monitor):
+        ctypes.string_at(0)  # reads address 0: SIGSEGV
+'''
+
+FAULTY_INTEGRATORS = ("test_hangs", "test_exits", "test_interrupts", "test_list_nfev", "test_wrong_shape",
+                      "test_segfaults")
+RUN_TIMEOUT_S = 10.0
+"""About 8 times the slowest rk4 or verlet run of seed_2min (1.2 s with a cold compile cache, bench/PERF.md
+"matrices", quick cold); the test runs the clean matrix first, so that the faulty one loads compiled code."""
+
+NORMAL = """
+scenes = ["seed_2min"]
+integrators = ["rk4", "verlet"]
+kh = [0.2, 0.1]
+[timing]
+min_repeats = 1
+min_total_s = 0.0
+"""
+
+
+def write(path: Path, text: str) -> Path:
+    path.write_text(textwrap.dedent(text), encoding="utf-8")
+    return path
+
+
+@pytest.fixture
+def faulty_plugin(tmp_path, monkeypatch):
+    """An importable plug-in module (workers get the parent's sys.path) removed again after the test."""
+    module_name = f"faulty_integrators_{os.getpid()}"
+    write(tmp_path / f"{module_name}.py", FAULTY)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    yield module_name
+    for name in FAULTY_INTEGRATORS:
+        unregister(name)
+    sys.modules.pop(module_name, None)
+
+
+def test_faulty_plugins_become_rows_and_normal_rows_are_unchanged(tmp_path, faulty_plugin):
+    faulty_matrix = write(tmp_path / "faulty.toml", NORMAL.replace("[timing]", f"""
+        plugins = ["{faulty_plugin}"]
+        [override.test_hangs]
+        tol = [1e-6]
+        [override.test_exits]
+        tol = [1e-6]
+        [override.test_interrupts]
+        tol = [1e-6]
+        [override.test_list_nfev]
+        tol = [1e-6]
+        [override.test_wrong_shape]
+        tol = [1e-6]
+        [override.test_segfaults]
+        tol = [1e-6]
+        [timing]
+        run_timeout_s = {RUN_TIMEOUT_S}""").replace('"rk4", "verlet"', '"rk4", "verlet", ' + ", ".join(
+        f'"{name}"' for name in FAULTY_INTEGRATORS)))
+    clean_matrix = write(tmp_path / "clean.toml", NORMAL)
+    matrix = load_matrix(faulty_matrix)
+    assert matrix.run_timeout_s == RUN_TIMEOUT_S
+    with ResultsStore(tmp_path / "clean.sqlite") as store:  # first: fills the compile cache the limit excludes
+        run_matrix(load_matrix(clean_matrix), store, jobs=2, progress=False)
+        clean = store.frame()
+    with ResultsStore(tmp_path / "faulty.sqlite") as store:
+        run_matrix(matrix, store, jobs=2, progress=False)
+        faulty = store.frame()
+        provenance = store.matrix_runs().iloc[-1]
+    assert provenance["status"] == "finished" and len(faulty) == len(matrix.runs) == 10
+    rows = faulty.set_index("integrator")
+    assert rows.loc["test_hangs", "status"] == "timeout"
+    assert f"time limit of {RUN_TIMEOUT_S:g} s" in rows.loc["test_hangs", "message"]
+    assert rows.loc["test_exits", "status"] == "failed"
+    assert rows.loc["test_exits", "message"].startswith("solve: SystemExit: 3")
+    assert rows.loc["test_interrupts", "status"] == "failed"
+    assert rows.loc["test_interrupts", "message"].startswith("solve: KeyboardInterrupt")
+    assert rows.loc["test_list_nfev", "status"] == "failed"
+    assert "nfev must be a non-negative integer" in rows.loc["test_list_nfev", "message"]
+    assert rows.loc["test_wrong_shape", "status"] == "failed"
+    assert "shape" in rows.loc["test_wrong_shape", "message"]
+    assert rows.loc["test_segfaults", "status"] == "failed"
+    assert rows.loc["test_segfaults", "message"] == WORKER_DIED
+    normal = faulty[faulty["integrator"].isin(["rk4", "verlet"])]
+    assert (normal["status"] == "ok").all(), normal["message"].tolist()
+    mismatches, costs, unmatched = compare_runs(clean, normal)
+    assert mismatches.empty and not unmatched and len(costs) == len(clean) == 4
+
+
+# --- validation: refused before anything runs ------------------------------------------------------------------
+
+
+def refusal(document: dict, tmp_path: Path | None = None) -> list[str]:
+    with pytest.raises(InputError) as caught:
+        parse_matrix(document, source="m")
+    return caught.value.problems
+
+
+HUGE = 10**400
+
+
+@pytest.mark.parametrize("document, expected", [
+    ({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [HUGE]}, "kh entries must be numbers a float can hold"),
+    ({"scene": {"s": {"base": "seed_2min", "length_m": HUGE}}, "integrators": ["rk4"], "kh": [0.1]},
+     "length_m must be a finite number"),
+    ({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [0.1], "timing": {"min_repeats": HUGE}},
+     "min_repeats must be an integer"),
+    ({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [0.1], "timing": {"run_timeout_s": HUGE}},
+     "run_timeout_s must be a finite number of seconds > 0"),
+    ({"scenes": ["seed_2min"], "integrators": [], "kh": [0.1]}, "integrators: the list is empty"),
+    ({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [1e-9]}, "steps in scene 'seed_2min'"),
+    ({"scenes": ["seed_2min"], "integrators": ["cvode_bdf"], "tol": [1e-300]}, "below the double-precision unit"),
+    ({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [0.1], "plugins": ["os"]}, "registers no integrator"),
+    ({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [0.1], "plugins": ["my_package.my_integrator"]},
+     "cannot import 'my_package.my_integrator': ModuleNotFoundError"),
+])
+def test_bad_matrices_are_refused_with_one_line_each(document, expected):
+    problems = refusal(document)
+    assert any(expected in problem for problem in problems), problems
+    assert all("\n" not in problem and len(problem) < 400 for problem in problems)
+
+
+def test_absurd_step_count_is_refused_with_the_estimate():
+    (problem,) = refusal({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [1e-9]})
+    estimate = float(problem.split("needs about ")[1].split(" steps")[0])
+    assert estimate > MAX_STEPS
+
+
+def test_plugins_are_imported_only_when_the_rest_is_valid(tmp_path, monkeypatch):
+    module_name = f"marker_plugin_{os.getpid()}"
+    marker = tmp_path / "imported"
+    write(tmp_path / f"{module_name}.py", f"""
+        from pathlib import Path
+        Path({str(marker)!r}).write_text("the plug-in ran")
+        """)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    try:
+        problems = refusal({"scenes": ["no_such_scene"], "integrators": ["rk4"], "kh": [0.1], "plugins": [module_name]})
+        assert any("unknown scene" in problem for problem in problems)
+        assert not marker.exists()
+        problems = refusal({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [0.1], "plugins": [module_name]})
+        assert marker.exists() and any("registers no integrator" in problem for problem in problems)
+    finally:
+        sys.modules.pop(module_name, None)
+
+
+def test_validation_of_a_long_sweep_finishes(tmp_path):
+    values = [0.2 * (1.0 - index / 400_000) for index in range(200_000)]
+    matrix = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": values})
+    assert len(matrix.runs) == len(values)
+    with pytest.raises(InputError) as caught:
+        parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [*values, values[7], -1.0]})
+    assert len(caught.value.problems) == 2
+
+
+# --- read-only commands --------------------------------------------------------------------------------------
+
+
+def test_read_only_commands_refuse_a_foreign_database_and_change_nothing(tmp_path, capsys):
+    foreign = tmp_path / "other.sqlite"
+    with sqlite3.connect(foreign) as connection:
+        connection.execute("CREATE TABLE customers (name TEXT)")
+        connection.execute("INSERT INTO customers VALUES ('Ada')")
+    connection.close()
+    before = hashlib.sha256(foreign.read_bytes()).hexdigest()
+    for command in (["results", "--db", str(foreign)], ["report", "--db", str(foreign), "--out", str(tmp_path / "r")]):
+        assert cli_main(command) == 2
+        err = capsys.readouterr().err
+        assert "not a foucault-bench results database" in err and "Traceback" not in err
+    assert hashlib.sha256(foreign.read_bytes()).hexdigest() == before
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["other.sqlite"]  # no -wal, -shm, report folder
+
+
+# --- signals, kills and the lock: a real matrix run in a subprocess ---------------------------------------------
+
+
+SLOW = """
+scenes = ["seed_2min"]
+integrators = ["rk4", "verlet"]
+kh = [5e-5, 4.5e-5, 4e-5, 3.5e-5, 3e-5, 2.5e-5, 2e-5, 1.5e-5]  # a few million steps: about 1 s a run with repeats
+[timing]
+min_repeats = 3
+min_total_s = 1.0
+"""
+
+
+def _start(matrix_path: Path, database: Path, *extra: str) -> subprocess.Popen:
+    command = [sys.executable, "-m", "foucault_bench.bench.cli", "run", "--matrix", str(matrix_path), "--db",
+               str(database), "--jobs", "2", "--no-progress", *extra]
+    return subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+
+
+def _workers_started(process: subprocess.Popen, count: int, database: Path, deadline_s: float = 120.0) -> list:
+    """The process's descendants once it has ``count`` of them and has stored a row (its matrix run is going)."""
+    parent = psutil.Process(process.pid)
+    deadline = time.monotonic() + deadline_s
+    rows_before = _stored_rows(database)
+    while time.monotonic() < deadline and process.poll() is None:
+        children = parent.children(recursive=True)
+        if len(children) >= count and _stored_rows(database) > rows_before:
+            return children
+        time.sleep(0.1)
+    raise AssertionError(f"the matrix run did not start its workers: {process.stderr.read().decode()[-2000:]}")
+
+
+def _stored_rows(database: Path) -> int:
+    try:
+        with sqlite3.connect(f"{database.as_uri()}?mode=ro", uri=True, timeout=5.0) as connection:
+            return connection.execute("SELECT COUNT(*) FROM runs").fetchone()[0]
+    except sqlite3.OperationalError:  # not created yet
+        return 0
+
+
+def _none_survive(processes: list, within_s: float = 10.0) -> list:
+    deadline = time.monotonic() + within_s
+    alive = processes
+    while alive and time.monotonic() < deadline:
+        alive = [process for process in alive if process.is_running() and process.status() != psutil.STATUS_ZOMBIE]
+        time.sleep(0.2)
+    return alive
+
+
+def test_signals_and_kills_leave_no_process_and_a_second_writer_is_refused(tmp_path, capsys):
+    matrix_path = write(tmp_path / "slow.toml", SLOW)
+    database = tmp_path / "slow.sqlite"
+    process = _start(matrix_path, database)
+    try:
+        children = _workers_started(process, 2, database)
+        # a second writer of the same matrix run: refused at once
+        assert cli_main(["run", "--matrix", str(matrix_path), "--db", str(database), "--resume", "--no-progress"]) == 2
+        assert "is being written by another process" in capsys.readouterr().err
+        process.send_signal(signal.SIGTERM)
+        assert process.wait(timeout=30) == 143
+        assert not _none_survive(children)
+    finally:
+        process.kill()
+    with ResultsStore(database, create=False) as store:
+        assert store.matrix_runs()["status"].tolist() == ["interrupted"]
+    process = _start(matrix_path, database, "--resume")
+    try:
+        children = _workers_started(process, 2, database)
+        process.send_signal(signal.SIGKILL)
+        process.wait(timeout=30)
+        assert not _none_survive(children)
+    finally:
+        process.kill()
+    process = _start(matrix_path, database, "--resume")
+    try:
+        children = _workers_started(process, 2, database)
+        process.send_signal(signal.SIGINT)
+        time.sleep(0.01)
+        process.send_signal(signal.SIGINT)  # while the first is being handled: everything ends at once
+        assert process.wait(timeout=30) == 130
+        assert not _none_survive(children)
+    finally:
+        process.kill()
+
+
+def test_a_task_past_its_time_limit_has_its_process_killed():
+    """What a Dask task does (``run_isolated``), here outside Dask: the worker process is killed at the limit
+    and the next task gets a fresh one that checks its code version first."""
+    from foucault_bench.bench.run import executors
+    from foucault_bench.bench.run.matrix import code_version
+
+    def on_failure(*task, status, reason):
+        return status, reason
+
+    status, reason = executors.run_isolated(time.sleep, (60,), 1.0, on_failure, code_version(()), ())
+    assert status == "timeout" and "time limit of 1 s" in reason
+    assert executors._THREAD.worker is None  # killed, not kept
+    assert executors.run_isolated(sum, ((1, 2),), 30.0, on_failure, code_version(()), ()) == 3
+    worker = executors._THREAD.worker
+    with pytest.raises(executors.CodeMismatch):
+        executors.run_isolated(sum, ((1, 2),), 30.0, on_failure, "another version", ())
+    worker.close()
+    assert not worker.alive()
+
+
+def test_a_closed_output_pipe_ends_quietly(tmp_path):
+    matrix = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"],
+                           "kh": [0.2 * 0.999**index for index in range(400)]})
+    database = tmp_path / "many.sqlite"
+    with ResultsStore(database) as store:
+        matrix_id, _ = store.start_matrix_run(matrix, jobs=1, scheduler=None, resume=False)
+        for spec in matrix.runs:
+            store.write_run({"run_key": spec.run_key, "matrix_id": matrix_id, "scene": spec.scene.name,
+                             "integrator": spec.integrator, "kh": spec.kh, "status": "ok", "message": ""})
+        store.finish_matrix_run(matrix_id)
+    process = subprocess.Popen([sys.executable, "-m", "foucault_bench.bench.cli", "results", "--db", str(database),
+                                "--all", "--csv", "/dev/stdout"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert process.stdout.readline().startswith(b"run_key")
+    process.stdout.close()  # like `| head -n 1`
+    assert process.wait(timeout=60) == 128 + signal.SIGPIPE
+    assert b"Traceback" not in process.stderr.read()
+
+
+# --- command options: checked before any work ---------------------------------------------------------------
+
+
+def test_bad_output_paths_and_options_are_refused_before_any_work(tmp_path, capsys):
+    regular = tmp_path / "a_file"
+    regular.write_text("not a folder")
+    missing = tmp_path / "no_such_folder"
+    cases = [
+        (["run", "--matrix", "quick", "--db", str(regular / "x.sqlite")], "--db"),
+        (["run", "--matrix", "quick", "--db", str(tmp_path)], "is a folder"),
+        (["run", "--matrix", "quick", "--run-timeout", "-1"], "--run-timeout must be a finite number"),
+        (["run", "--matrix", "quick", "--run-timeout", "inf"], "--run-timeout must be a finite number"),
+        (["results", "--db", str(tmp_path / "none.sqlite"), "--csv", str(missing / "rows.csv")],
+         f"the folder {missing} does not exist"),
+        (["results", "--db", str(tmp_path / "none.sqlite"), "--parquet", str(regular / "rows.parquet")],
+         "is not a folder"),
+        (["check", "--thresholds", "default", "--junit", str(missing / "junit.xml")],
+         f"the folder {missing} does not exist"),
+        (["report", "--db", str(tmp_path / "none.sqlite"), "--out", str(regular)], "exists and is not a folder"),
+    ]
+    for command, expected in cases:
+        assert cli_main(command) == 2, command
+        err = capsys.readouterr().err
+        assert expected in err and "Traceback" not in err, (command, err)
+        assert len([line for line in err.splitlines() if "error:" in line]) == 1
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["a_file"]  # nothing created
+
+
+def test_more_jobs_than_cores_are_capped_with_a_note(capsys):
+    from foucault_bench.bench.commands.run import default_jobs, jobs_to_use
+
+    assert jobs_to_use(10_000) == default_jobs()
+    assert f"--jobs 10000 is more than the {default_jobs()} core(s) available" in capsys.readouterr().err
+    assert jobs_to_use(1) == 1
+    with pytest.raises(InputError):
+        jobs_to_use(0)
