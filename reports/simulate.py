@@ -41,7 +41,7 @@ from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
 from foucault_bench.integrators import STATUS_OK, Problem, get_integrator
 from foucault_bench.integrators.registry import REGISTRY
-from foucault_bench.models import get_model
+from foucault_bench.models import PendulumParameters, get_model
 from foucault_bench.models.analytic import linear_exact
 from foucault_bench.reports.charts import integrator_style
 from foucault_bench.reports.simulation_settings import SimulationSettings

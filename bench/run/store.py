@@ -508,6 +508,7 @@ def compare_runs(frame_a: pd.DataFrame, frame_b: pd.DataFrame) -> tuple[pd.DataF
     time of 0 or below (nothing compiled, or a cached compile: the first call was no slower than the others)
     or a missing cost (a failed run) has no meaningful ratio, and gives NaN.
     """
+    import numpy as np
     import pandas as pd
 
     left = frame_a.assign(run=run_identity(frame_a))
