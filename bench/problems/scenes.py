@@ -15,7 +15,7 @@ How the built-in scenes were chosen:
 * **Amplitude.** Not well sourced for any real pendulum (models/README.md "Real pendulums"): each scene states
   the amplitude it assumes, a swing of θ₀ ≈ 0.045-0.05 rad unless the scene is about large swings.
 * **Duration.** Cost grows with the number of swings, so each real scene lasts 200-520 small-swing periods
-  (30 min to 1 h), enough for the swing plane to turn 5-15°; the default matrix (every integrator family
+  (30 min to 1 h), enough for the swing plane to turn 4-15°; the default matrix (every integrator family
   over a work-precision sweep of every real scene) then stays within minutes on 2 cores, and the real128
   reference of a scene takes at most about 6 s (measured; ``bench.problems.reference``).
 * **Output interval.** About an eighth of a small-swing period, chosen not to divide the half period exactly:
@@ -280,15 +280,16 @@ def _field_problems(values: Mapping[str, Any]) -> list[str]:
 # --- the built-in scenes -----------------------------------------------------------------------------------------
 
 
-def _linear_why(theta0: float, quoted: str, quoted_rounding: float, latitude_deg: float) -> str:
+def _linear_why(theta0: float, quoted: str, quoted_rounding: float, latitude_deg: float, length_m: float) -> str:
+    k = math.sqrt(STANDARD_GRAVITY_M_S2 / length_m)
     airy = 0.375 * theta0**2
     release_side = 0.25 * theta0**3 / abs(math.tan(math.radians(latitude_deg)))
     return (
         f"The scene measures the swing plane's rate, quoted as {quoted} (rounding ±{quoted_rounding:.1e} relative). "
         f"The linear model (seed eqs. 6-7) turns the plane at exactly −Ω_E sin φ; what it leaves out at θ₀ = "
         f"{theta0:.4f} is the Airy precession (3/8)θ₀² = {airy:.1e}, the release-side term ≲ ¼θ₀³cot φ = "
-        f"{release_side:.0e} and the centrifugal anisotropy (≈ (Ω_E/k)², below 1e-8), all below the quoted "
-        f"rounding, so the spherical model would not change the figure the scene is about (bench.problems.adequacy "
+        f"{release_side:.0e} and the centrifugal anisotropy (≈ (Ω_E/k)² = {(SIDEREAL_EARTH_RATE_RAD_S / k) ** 2:.1e}), "
+        f"all below the quoted rounding, so the spherical model would not change the figure the scene is about (bench.problems.adequacy "
         f"reports the trajectory it does change: the finite-amplitude period)."
     )
 
@@ -313,7 +314,7 @@ def _builtin_scenes() -> dict[str, Scene]:
             params=PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0),
             duration_s=3600.0,
             output_interval_s=2.0,
-            why_model=_linear_why(3.0 / 67.0, "11.3°/h clockwise", 0.05 / 11.3, 48.846),
+            why_model=_linear_why(3.0 / 67.0, "11.3°/h clockwise", 0.05 / 11.3, 48.846, 67.0),
             source="Foucault, C. R. Acad. Sci. Paris 32, 135 (1851); Aczel, Pendulum (2003): the Panthéon pendulum: "
                    "L = 67 m, 28 kg bob, period 16.4 s, 11.3°/h clockwise.",
             assumptions="amplitude 3 m (the figure commonly given); released from rest towards the East; "
@@ -326,7 +327,7 @@ def _builtin_scenes() -> dict[str, Scene]:
             params=PendulumParameters(length_m=22.9, latitude_deg=40.749, amplitude_m=1.0),
             duration_s=3600.0,
             output_interval_s=1.25,
-            why_model=_linear_why(1.0 / 22.9, "9.8°/h clockwise", 0.05 / 9.8, 40.749),
+            why_model=_linear_why(1.0 / 22.9, "9.8°/h clockwise", 0.05 / 9.8, 40.749, 22.9),
             source="United Nations gift record UNNY134G (Foucault Pendulum, 1955): wire 75 ft = 22.9 m, "
                    "200 lb = 91 kg bob; period 9.6 s, "
                    "9.8°/h clockwise.",
@@ -340,7 +341,7 @@ def _builtin_scenes() -> dict[str, Scene]:
             params=PendulumParameters(length_m=12.2, latitude_deg=34.118, amplitude_m=0.6),
             duration_s=1800.0,
             output_interval_s=0.9,
-            why_model=_linear_why(0.6 / 12.2, "8.4°/h clockwise", 0.05 / 8.4, 34.118),
+            why_model=_linear_why(0.6 / 12.2, "8.4°/h clockwise", 0.05 / 8.4, 34.118, 12.2),
             source="Griffith Observatory exhibit description: cable 40 ft = 12.2 m, 240 lb = 109 kg bob; "
                    "period 7.0 s, 8.4°/h clockwise.",
             assumptions="amplitude 0.6 m (θ₀ ≈ 0.049, not sourced); released from rest towards the East; "
