@@ -418,10 +418,11 @@ def test_bad_output_paths_and_options_are_refused_before_any_work(tmp_path, caps
 
 
 def test_more_jobs_than_cores_are_capped_with_a_note(capsys):
-    from foucault_bench.bench.commands.run import default_jobs, jobs_to_use
+    from foucault_bench.bench.commands.options import jobs
+    from foucault_bench.bench.run.provenance import available_cores
 
-    assert jobs_to_use(10_000) == default_jobs()
-    assert f"--jobs 10000 is more than the {default_jobs()} core(s) available" in capsys.readouterr().err
-    assert jobs_to_use(1) == 1
+    assert jobs(10_000) == available_cores()
+    assert f"--jobs 10000 is more than the {available_cores()} core(s) available" in capsys.readouterr().err
+    assert jobs(1) == 1
     with pytest.raises(InputError):
-        jobs_to_use(0)
+        jobs(0)

@@ -183,8 +183,10 @@ def _old_database(path, extra_column: str | None = None) -> None:
     names = [column.name for column in old] + ([extra_column] if extra_column else [])
     with sqlite3.connect(path) as connection:
         connection.execute(f"CREATE TABLE runs ({', '.join(names)}, PRIMARY KEY (matrix_id, run_key))")
-        connection.execute("CREATE TABLE matrix_runs (matrix_id TEXT PRIMARY KEY, matrix_name TEXT, started_utc TEXT)")
-        connection.execute("INSERT INTO matrix_runs VALUES ('old-1', 'old', '2026-01-01T00:00:00+00:00')")
+        connection.execute("CREATE TABLE matrix_runs (matrix_id TEXT PRIMARY KEY, matrix_name TEXT, matrix_hash TEXT, "
+                           "status TEXT, started_utc TEXT)")
+        connection.execute("INSERT INTO matrix_runs VALUES ('old-1', 'old', 'abc', 'finished', "
+                           "'2026-01-01T00:00:00+00:00')")
         connection.execute("INSERT INTO runs (run_key, matrix_id, scene, integrator, family, status, reference_error) "
                            "VALUES ('k1', 'old-1', 'seed_2min', 'rk4', 'runge-kutta', 'ok', 1.5e-7)")
     connection.close()

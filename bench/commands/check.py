@@ -30,6 +30,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--format", choices=("text", "markdown"), default="text",
                         help="table format on stdout (markdown for CI job summaries; default: %(default)s)")
     parser.add_argument("--junit", metavar="FILE", help="also write the checks as JUnit XML")
+    parser.add_argument("--run-timeout", type=float, default=None, metavar="SECONDS",
+                        help="when running a matrix: per-run time limit (default: the matrix's [timing] "
+                             "run_timeout_s, else 600 s); a run past it is stored with status timeout")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars while running a matrix")
 
 
@@ -39,6 +42,13 @@ def main(args: argparse.Namespace) -> int:
     from foucault_bench.bench.gate.select import validate_against
     from foucault_bench.bench.gate.thresholds import load_thresholds
 
+    from foucault_bench.bench.commands.outputs import creatable, output_file
+
+    # before any work: a bad output path is exit 2, not a gate run lost at the end
+    if args.junit:
+        output_file(args.junit, "--junit")
+    if args.db:
+        creatable(args.db, "--db", folder=False)
     thresholds = load_thresholds(args.thresholds)
     if args.matrix_id and not args.results:
         raise InputError("--matrix-id selects a stored run: give it with --results")
@@ -58,7 +68,7 @@ def main(args: argparse.Namespace) -> int:
         if matrix_name is None:
             raise InputError(f"{thresholds.source} names no matrix: give --results DB or --matrix FILE")
         frame, what = run_for_check(thresholds, matrix_name, db=args.db, jobs=options.jobs(args.jobs),
-                                    progress=not args.no_progress)
+                                    progress=not args.no_progress, run_timeout_s=args.run_timeout)
     validate_against(thresholds, frame, what=what)
     outcomes = evaluate(thresholds, frame)
     print(f"checking {thresholds.source} against {what}", file=sys.stderr)

@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
+import sys
+
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.run.provenance import available_cores
 
 
 def jobs(value: int | None) -> int:
-    """The ``--jobs`` value to use: the cores available when not given; at least 1."""
-    chosen = available_cores() if value is None else value
-    if chosen < 1:
-        raise InputError(f"--jobs must be at least 1, got {chosen}")
-    return chosen
+    """The ``--jobs`` value to use: the cores available when not given; at least 1; more than the cores available
+    is capped to them with a note (runs are single-threaded and CPU-bound: more workers only share the cores)."""
+    cores = available_cores()
+    if value is None:
+        return cores
+    if value < 1:
+        raise InputError(f"--jobs must be at least 1, got {value}")
+    if value > cores:
+        print(f"note: --jobs {value} is more than the {cores} core(s) available: using {cores}", file=sys.stderr)
+        return cores
+    return value

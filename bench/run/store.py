@@ -135,15 +135,15 @@ class ResultsStore:
             raise InputError(f"no results database at {self.path} (run `foucault-bench run` first, or give --db)")
         try:
             self.connection = sqlite3.connect(f"{self.path.resolve().as_uri()}?mode=ro", uri=True, timeout=30.0)
-            if not self._is_results_database():
-                self.connection.close()
-                raise InputError(f"{self.path}: not a foucault-bench results database (no {RUNS_TABLE} and "
-                                 f"{MATRIX_RUNS_TABLE} tables); nothing was changed")
             version = self.schema_version
             if version > SCHEMA_VERSION:
                 self.connection.close()
                 raise InputError(f"{self.path}: written with results schema version {version}, newer than this "
                                  f"foucault-bench reads ({SCHEMA_VERSION}): upgrade foucault-bench")
+            if not self._is_results_database():
+                self.connection.close()
+                raise InputError(f"{self.path}: not a foucault-bench results database (no {RUNS_TABLE} and "
+                                 f"{MATRIX_RUNS_TABLE} tables); nothing was changed")
             if version < SCHEMA_VERSION:  # a results database of an older version: migrated, then read
                 self.connection.close()
                 ResultsStore(self.path).close()
