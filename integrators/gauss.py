@@ -84,6 +84,22 @@ def _norm(dx, dy, dvx, dvy, k, scale):
     return math.sqrt(k * k * (dx * dx + dy * dy) + dvx * dvx + dvy * dvy) / scale
 
 
+@jit
+def _sweep_verdict(increment, previous, smallest, stalled):
+    """The stopping rule after one fixed-point sweep (module docstring): (done, converged, smallest increment so
+    far, sweeps since it was reached)."""
+    if increment < smallest:
+        smallest = increment
+        stalled = 0
+    else:
+        stalled += 1
+    contraction = increment / previous  # 0 on the first sweep: no estimate yet
+    remaining = increment * contraction / (1.0 - contraction) if 0.0 < contraction < 1.0 else math.inf
+    if increment == 0.0 or remaining <= HALF_ULP or (stalled >= STALL_SWEEPS and smallest <= CONVERGED_INCREMENT):
+        return True, True, smallest, stalled
+    return increment > DIVERGED_INCREMENT, False, smallest, stalled
+
+
 def _midpoint_step(acceleration: Callable) -> Callable:
     """Implicit midpoint rule: y₁ = y₀ + Z, Z = h f(y₀ + Z/2) (c = ½, a = ½, b = 1)."""
 
@@ -104,17 +120,8 @@ def _midpoint_step(acceleration: Callable) -> Callable:
             nx, ny, nvx, nvy = 0.5 * h * mvx, 0.5 * h * mvy, 0.5 * h * max_, 0.5 * h * may
             increment = _norm(nx - zx, ny - zy, nvx - zvx, nvy - zvy, k, scale)
             zx, zy, zvx, zvy = nx, ny, nvx, nvy
-            if increment < smallest:
-                smallest = increment
-                stalled = 0
-            else:
-                stalled += 1
-            contraction = increment / previous  # 0 on the first sweep: no estimate yet
-            remaining = increment * contraction / (1.0 - contraction) if 0.0 < contraction < 1.0 else math.inf
-            if increment == 0.0 or remaining <= HALF_ULP or (stalled >= STALL_SWEEPS and smallest <= CONVERGED_INCREMENT):
-                converged = True
-                break
-            if increment > DIVERGED_INCREMENT:
+            done, converged, smallest, stalled = _sweep_verdict(increment, previous, smallest, stalled)
+            if done:
                 break
             previous = increment
         if not converged:
@@ -161,17 +168,8 @@ def _gauss2_step(acceleration: Callable) -> Callable:
             )
             k1x, k1y, k1vx, k1vy = u1x, u1y, b1x, b1y
             k2x, k2y, k2vx, k2vy = u2x, u2y, b2x, b2y
-            if increment < smallest:
-                smallest = increment
-                stalled = 0
-            else:
-                stalled += 1
-            contraction = increment / previous  # 0 on the first sweep: no estimate yet
-            remaining = increment * contraction / (1.0 - contraction) if 0.0 < contraction < 1.0 else math.inf
-            if increment == 0.0 or remaining <= HALF_ULP or (stalled >= STALL_SWEEPS and smallest <= CONVERGED_INCREMENT):
-                converged = True
-                break
-            if increment > DIVERGED_INCREMENT:
+            done, converged, smallest, stalled = _sweep_verdict(increment, previous, smallest, stalled)
+            if done:
                 break
             previous = increment
         if not converged:
