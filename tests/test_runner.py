@@ -177,7 +177,8 @@ def test_resume_after_a_killed_run_loses_and_duplicates_nothing(tmp_path):
         [timing]
         min_repeats = 3
         min_total_s = 0.3
-        """)
+        max_repeats = 100000
+        """)  # every run repeats for 0.3 s of CPU time, so that the matrix is still running when it is killed
     database = tmp_path / "resume.sqlite"
     sources_before = code_version.__wrapped__()
     command = [sys.executable, "-m", "foucault_bench.bench.cli", "run", "--matrix", str(matrix_path), "--db", str(database),
