@@ -30,11 +30,11 @@ import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-
+from foucault_bench.bench.schema import VERDICT_COLUMNS
 from foucault_bench.bench.verdicts.turning_points import (
     finite_prefix,
-    least_squares_slope,
     grid_accelerations,
+    least_squares_slope,
     precession_rate,
     rate_scale,
     turning_points_from_grid,
@@ -102,22 +102,8 @@ def released_from_rest(params: PendulumParameters) -> bool:
 # --- all verdicts of one run -------------------------------------------------------------------------------------
 
 
-VERDICT_KEYS = (
-    "energy_conserved",
-    "energy_max_rel_error",
-    "energy_drift_per_s",
-    "energy_max_rel_error_steps",
-    "precession_rate_rad_s",
-    "precession_rate_error",
-    "precession_rate_error_rad_s",
-    "precession_rate_error_earth",
-    "precession_rate_ref_error",
-    "precession_rate_ref_error_rad_s",
-    "precession_rate_ref_error_earth",
-    "analytic_gap_exact",
-    "analytic_gap_seed",
-    "reference_error",
-)
+VERDICT_KEYS = ("energy_conserved", "precession_rate_rad_s", *VERDICT_COLUMNS)
+"""Every verdict of one run: the schema's accuracy columns plus the model fact and the measured rate."""
 
 
 def rate_errors(prefix: str, error_rad_s: float, params: PendulumParameters) -> dict[str, float]:
