@@ -98,7 +98,7 @@ def _sphere_step(force: Callable) -> Callable:
         wx = p[P_OMEGA_X]
         wy = p[P_OMEGA_Y]
         wz = p[P_OMEGA_Z]
-        z = -(length * length - x * x - y * y) ** 0.5
+        z = -math.sqrt(length * length - x * x - y * y)
         vz = -(x * vx + y * vy) / z
         x, y, z, vx, vy, vz = _geodesic(x, y, z, vx, vy, vz, length, half)
         fx, fy, fz = force(math, x, y, z, 0.0, 0.0, 0.0, p)
@@ -134,7 +134,7 @@ def _sphere_step(force: Callable) -> Callable:
 def _geodesic(x, y, z, vx, vy, vz, length, tau):
     """Exact free motion on the sphere |r| = L for a time τ: a great circle at constant speed s = |v|, r and v
     turned by the angle sτ/L in the plane they span (v ⟂ r)."""
-    speed = (vx * vx + vy * vy + vz * vz) ** 0.5
+    speed = math.sqrt(vx * vx + vy * vy + vz * vz)
     if speed == 0.0:
         return x, y, z, vx, vy, vz
     angle = speed * tau / length

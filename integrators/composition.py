@@ -28,9 +28,8 @@ from typing import Callable, ClassVar
 import numpy as np
 
 from foucault_bench.integrators.fixed_step import FixedStepIntegrator
-from foucault_bench.integrators.verlet import RotatingVerlet
+from foucault_bench.integrators.verlet import RotatingVerlet, verlet_sequence
 from foucault_bench.models import Model
-from foucault_bench.models.jit import jit
 
 POWER_SUM_TOLERANCE = 1e-14
 """How far from zero the power sums Σγ³, Σγ⁵ (and from one Σγ) may be: a few ulp of the largest term."""
@@ -85,18 +84,6 @@ class Composition:
         return low
 
 
-def compose(step: Callable, weights: tuple[float, ...]) -> Callable:
-    """A numba step ``(x, y, vx, vy, h, p)`` applying ``step`` with the sub-steps γ_i h in turn."""
-
-    @jit
-    def composed(x, y, vx, vy, h, p):
-        for gamma in weights:
-            x, y, vx, vy = step(x, y, vx, vy, gamma * h, p)
-        return x, y, vx, vy
-
-    return composed
-
-
 class VerletComposition(FixedStepIntegrator):
     """Base of the compositions of the rotating-frame Verlet step: a subclass declares ``composition``."""
 
@@ -112,7 +99,7 @@ class VerletComposition(FixedStepIntegrator):
             cls.stability_limit_kh = cls.composition.oscillator_stability_limit()
 
     def make_step(self, model: Model) -> Callable:
-        return compose(RotatingVerlet().make_step(model), tuple(float(g) for g in self.composition.weights))
+        return verlet_sequence(model, tuple(float(g) for g in self.composition.weights))
 
 
 def triple_jump(order: int) -> Composition:

@@ -103,7 +103,7 @@ def _sweep_verdict(increment, previous, smallest, stalled):
 def _midpoint_step(acceleration: Callable) -> Callable:
     """Implicit midpoint rule: y₁ = y₀ + Z, Z = h f(y₀ + Z/2) (c = ½, a = ½, b = 1)."""
 
-    @jit
+    @jit(inline="always")
     def step(x, y, vx, vy, h, p):
         ax, ay = acceleration(x, y, vx, vy, p)
         k = math.sqrt(p[P_K2])
@@ -143,7 +143,7 @@ def _gauss2_step(acceleration: Callable) -> Callable:
     """Two-stage Gauss: c = ½ ∓ √3/6, A = [[¼, ¼ − √3/6], [¼ + √3/6, ¼]], b = (½, ½) (order 4).
     Iterates on the stage derivatives K_i = f(y + h Σ_j a_ij K_j); y₁ = y + h(K₁ + K₂)/2."""
 
-    @jit
+    @jit(inline="always")
     def step(x, y, vx, vy, h, p):
         ax, ay = acceleration(x, y, vx, vy, p)
         k = math.sqrt(p[P_K2])

@@ -27,9 +27,16 @@ added to both half kicks, explicitly in the first and implicitly (two fixed-poin
 kick–drift–kick part is then the composition of a first-order map with its adjoint, symmetric and of order 2,
 but no longer symplectic (that model has no symplectic structure to keep). 2 force evaluations per step
 (the first kick of a step cannot reuse the last kick of the previous one because R(h/2) turns r in between).
+
+``verlet_sequence`` builds the step for a sequence of sub-steps γ_1 h … γ_s h (the compositions of
+``integrators.composition``; one Verlet step is γ = (1,)): the state stays in the canonical variables from the
+first sub-step to the last, and the two half rotations between neighbouring sub-steps are one rotation (both
+turn about ω_c, so their angles add). That is the same map as s separate Verlet steps, with s − 1 fewer
+rotations and variable changes.
 """
 
 import math
+from dataclasses import dataclass
 from typing import Callable, ClassVar
 
 from foucault_bench.integrators.fixed_step import FixedStepIntegrator
@@ -53,27 +60,89 @@ class RotatingVerlet(FixedStepIntegrator):
     )
 
     def make_step(self, model: Model) -> Callable:
-        kick = model.numba_kick
-        if model.constrained_to_sphere:
-            if not model.hamiltonian:
-                raise NotImplementedError("RATTLE with a non-Coriolis velocity force is not implemented")
-            return _sphere_step(kick)
-        return _plane_step(kick, model.numba_remainder, model.hamiltonian)
+        return verlet_sequence(model, (1.0,))
 
 
-def _plane_step(kick: Callable, remainder: Callable, hamiltonian: bool) -> Callable:
-    @jit
+@dataclass(frozen=True)
+class _Parts:
+    """The pieces of a rotating-frame Verlet step on one geometry, each a numba function of the canonical state
+    q = (r, p) as a tuple: (x, y, px, py) on the plane, (x, y, z, px, py, pz) on the sphere."""
+
+    to_canonical: Callable  # (x, y, vx, vy, p) -> q
+    rotate: Callable  # (q, c, h, p) -> R(c h) q: r and p turned about ω_c by the angle −|ω_c| c h
+    kick_drift_kick: Callable  # (q, h, p) -> V(h) q
+    from_canonical: Callable  # (q, p) -> (x, y, vx, vy)
+
+
+def rotation_coefficients(weights: tuple[float, ...]) -> tuple[float, ...]:
+    """c_0 … c_s of R(c_s h) ∘ V(γ_s h) ∘ … ∘ R(c_1 h) ∘ V(γ_1 h) ∘ R(c_0 h): the half rotations of two
+    neighbouring sub-steps merged (rotations about one axis add), c_0 = γ_1/2, c_i = (γ_i + γ_(i+1))/2,
+    c_s = γ_s/2."""
+    inner = [0.5 * (a + b) for a, b in zip(weights[:-1], weights[1:])]
+    return (0.5 * weights[0], *inner, 0.5 * weights[-1])
+
+
+def verlet_sequence(model: Model, weights: tuple[float, ...]) -> Callable:
+    """A numba step ``(x, y, vx, vy, h, p)``: the rotating-frame Verlet steps with sub-steps γ_1 h … γ_s h in turn,
+    computed in the canonical variables with neighbouring rotations merged (``rotation_coefficients``); one
+    Verlet step is ``weights = (1.0,)``. Straight-line code (every piece inlined), so that the rotations, which
+    depend on p and h alone, are computed once per run by the compiler (hoisted out of the fixed-step loop)."""
+    parts = _sphere_parts(model) if model.constrained_to_sphere else _plane_parts(model)
+    coefficients = rotation_coefficients(weights)
+    chain = _finish(parts, coefficients[-1])
+    for gamma, c in reversed(tuple(zip(weights, coefficients[:-1]))):
+        chain = _sub_step(parts, c, gamma, chain)
+    to_canonical = parts.to_canonical
+
+    @jit(inline="always")
     def step(x, y, vx, vy, h, p):
+        return chain(to_canonical(x, y, vx, vy, p), h, p)
+
+    return step
+
+
+def _sub_step(parts: _Parts, c: float, gamma: float, following: Callable) -> Callable:
+    rotate, kick_drift_kick = parts.rotate, parts.kick_drift_kick
+
+    @jit(inline="always")
+    def sub_step(q, h, p):
+        return following(kick_drift_kick(rotate(q, c, h, p), gamma * h, p), h, p)
+
+    return sub_step
+
+
+def _finish(parts: _Parts, c: float) -> Callable:
+    rotate, from_canonical = parts.rotate, parts.from_canonical
+
+    @jit(inline="always")
+    def finish(q, h, p):
+        return from_canonical(rotate(q, c, h, p), p)
+
+    return finish
+
+
+def _plane_parts(model: Model) -> _Parts:
+    """The planar pieces: ω_c = a ẑ, p = v + a ẑ×r; the model's velocity-dependent remainder (if any) added to the
+    half kicks, explicitly in the first and implicitly (two fixed-point sweeps) in the second."""
+    kick, remainder, hamiltonian = model.numba_kick, model.numba_remainder, model.hamiltonian
+
+    @jit(inline="always")
+    def to_canonical(x, y, vx, vy, p):
         a = p[P_OMEGA_Z]
-        cos_half = math.cos(-0.5 * a * h)
-        sin_half = math.sin(-0.5 * a * h)
-        # canonical momentum p = v + ω_c×r, ω_c = a ẑ
-        px = vx - a * y
-        py = vy + a * x
-        # R(h/2): rotate r and p by −a h/2 about z
-        x, y = cos_half * x - sin_half * y, sin_half * x + cos_half * y
-        px, py = cos_half * px - sin_half * py, sin_half * px + cos_half * py
-        # V(h): kick, drift, kick
+        return x, y, vx - a * y, vy + a * x
+
+    @jit(inline="always")
+    def rotate(q, c, h, p):
+        x, y, px, py = q
+        angle = -c * p[P_OMEGA_Z] * h
+        cos_a = math.cos(angle)
+        sin_a = math.sin(angle)
+        return (cos_a * x - sin_a * y, sin_a * x + cos_a * y, cos_a * px - sin_a * py, sin_a * px + cos_a * py)
+
+    @jit(inline="always")
+    def kick_drift_kick(q, h, p):
+        x, y, px, py = q
+        a = p[P_OMEGA_Z]
         fx, fy, _ = kick(x, y, 0.0, p)
         if not hamiltonian:
             gx, gy, _ = remainder(x, y, 0.0, px + a * y, py - a * x, 0.0, p)
@@ -93,34 +162,46 @@ def _plane_step(kick: Callable, remainder: Callable, hamiltonian: bool) -> Calla
                 gx, gy, _ = remainder(x, y, 0.0, px + a * y, py - a * x, 0.0, p)
                 px = px_half + 0.5 * h * (fx + gx)
                 py = py_half + 0.5 * h * (fy + gy)
-        # R(h/2)
-        x, y = cos_half * x - sin_half * y, sin_half * x + cos_half * y
-        px, py = cos_half * px - sin_half * py, sin_half * px + cos_half * py
+        return x, y, px, py
+
+    @jit(inline="always")
+    def from_canonical(q, p):
+        x, y, px, py = q
+        a = p[P_OMEGA_Z]
         return x, y, px + a * y, py - a * x
 
-    return step
+    return _Parts(to_canonical, rotate, kick_drift_kick, from_canonical)
 
 
-def _sphere_step(kick: Callable) -> Callable:
-    # Inlined into the fixed-step loop (too large for LLVM's own inliner), so that the rotation matrix, which
-    # depends only on p and h, is computed once per run (hoisted out of the loop) instead of once per call.
+def _sphere_parts(model: Model) -> _Parts:
+    """The spherical pieces: full ω, p = v + ω×r, RATTLE for the kick–drift–kick on |r| = L."""
+    if not model.hamiltonian:
+        raise NotImplementedError("RATTLE with a non-Coriolis velocity force is not implemented")
+    kick = model.numba_kick
+
     @jit(inline="always")
-    def step(x, y, vx, vy, h, p):
+    def to_canonical(x, y, vx, vy, p):
         wx = p[P_OMEGA_X]
         wy = p[P_OMEGA_Y]
         wz = p[P_OMEGA_Z]
         length = p[P_LENGTH]
-        l2 = length * length
-        rotation = _half_step_rotation(wx, wy, wz, h)
-        z = -math.sqrt(l2 - x * x - y * y)
+        z = -math.sqrt(length * length - x * x - y * y)
         vz = -(x * vx + y * vy) / z
-        # canonical momentum p = v + ω×r
-        px = vx + wy * z - wz * y
-        py = vy + wz * x - wx * z
-        pz = vz + wx * y - wy * x
-        x, y, z = _rotate(rotation, x, y, z)
-        px, py, pz = _rotate(rotation, px, py, pz)
-        # RATTLE on ½|p|² + U(r), |r| = L
+        return x, y, z, vx + wy * z - wz * y, vy + wz * x - wx * z, vz + wx * y - wy * x
+
+    @jit(inline="always")
+    def rotate(q, c, h, p):
+        x, y, z, px, py, pz = q
+        rotation = _rotation(p[P_OMEGA_X], p[P_OMEGA_Y], p[P_OMEGA_Z], c, h)
+        x, y, z = _apply(rotation, x, y, z)
+        px, py, pz = _apply(rotation, px, py, pz)
+        return x, y, z, px, py, pz
+
+    @jit(inline="always")
+    def kick_drift_kick(q, h, p):
+        x, y, z, px, py, pz = q
+        length = p[P_LENGTH]
+        l2 = length * length
         fx, fy, fz = kick(x, y, z, p)
         qx = x + h * (px + 0.5 * h * fx)
         qy = y + h * (py + 0.5 * h * fy)
@@ -139,19 +220,22 @@ def _sphere_step(kick: Callable) -> Callable:
         py += 0.5 * h * fy
         pz += 0.5 * h * fz
         nu = -(xn * px + yn * py + zn * pz) / l2  # keeps r·p = 0 (hidden constraint)
-        px += nu * xn
-        py += nu * yn
-        pz += nu * zn
-        xn, yn, zn = _rotate(rotation, xn, yn, zn)
-        px, py, pz = _rotate(rotation, px, py, pz)
-        return xn, yn, px - (wy * zn - wz * yn), py - (wz * xn - wx * zn)
+        return xn, yn, zn, px + nu * xn, py + nu * yn, pz + nu * zn
 
-    return step
+    @jit(inline="always")
+    def from_canonical(q, p):
+        x, y, z, px, py, pz = q
+        wx = p[P_OMEGA_X]
+        wy = p[P_OMEGA_Y]
+        wz = p[P_OMEGA_Z]
+        return x, y, px - (wy * z - wz * y), py - (wz * x - wx * z)
+
+    return _Parts(to_canonical, rotate, kick_drift_kick, from_canonical)
 
 
 @jit
-def _half_step_rotation(wx, wy, wz, h):
-    """The rotation about ω = (wx, wy, wz) by the angle −|ω| h/2 as a 3×3 matrix (row-major 9-tuple):
+def _rotation(wx, wy, wz, c, h):
+    """The rotation about ω = (wx, wy, wz) by the angle −|ω| c h as a 3×3 matrix (row-major 9-tuple):
     R = cos a·I + sin a·[n]× + (1 − cos a)·n nᵀ, n = ω/|ω| (Rodrigues' rotation formula in matrix form,
     e.g. Goldstein, Classical Mechanics, 3rd ed., §4.7); the identity when ω = 0. Computed once per run,
     R applies in 9 multiplications and 6 additions instead of Rodrigues' vector form's 18 and 12."""
@@ -161,7 +245,7 @@ def _half_step_rotation(wx, wy, wz, h):
     nx = wx / rate
     ny = wy / rate
     nz = wz / rate
-    angle = -0.5 * rate * h
+    angle = -c * rate * h
     cos_a = math.cos(angle)
     sin_a = math.sin(angle)
     u = 1.0 - cos_a
@@ -173,8 +257,8 @@ def _half_step_rotation(wx, wy, wz, h):
 
 
 @jit
-def _rotate(rotation, vx, vy, vz):
-    """R·(vx, vy, vz) for a row-major 3×3 matrix R (``_half_step_rotation``)."""
+def _apply(rotation, vx, vy, vz):
+    """R·(vx, vy, vz) for a row-major 3×3 matrix R (``_rotation``)."""
     return (
         rotation[0] * vx + rotation[1] * vy + rotation[2] * vz,
         rotation[3] * vx + rotation[4] * vy + rotation[5] * vz,

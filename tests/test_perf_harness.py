@@ -18,8 +18,11 @@ import numpy as np
 import pytest
 
 from foucault_bench.bench.perf.c_loops import MODELS, SCHEMES, CompilerMissing, compile_c_loops
-from foucault_bench.bench.perf.fixed_step import LoopPair
+from foucault_bench.bench.perf.fixed_step import KH, LoopPair
 from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio, run_probe
+from foucault_bench.integrators import get_integrator
+from foucault_bench.integrators.fixed_step import FixedStepIntegrator
+from foucault_bench.integrators.registry import built_in_names
 
 
 @pytest.fixture(scope="module")
@@ -41,9 +44,18 @@ def test_c_loop_computes_the_numba_kernel_states(c_loops, model: str, scheme: st
     assert plain.status == 0 and plain.steps_done == 20_000
 
 
-def test_c_loop_reports_divergence_like_the_kernel(c_loops) -> None:
-    pair = LoopPair(c_loops, "linear", "explicit_euler", n_steps=10_000)
-    pair.h *= 2_000.0  # k·h = 1: explicit Euler's energy grows by 2 per step and soon leaves the bound
+def test_every_built_in_fixed_step_scheme_has_a_c_reference() -> None:
+    fixed_step = {name for name in built_in_names() if isinstance(get_integrator(name), FixedStepIntegrator)}
+    assert fixed_step == set(SCHEMES)
+
+
+@pytest.mark.parametrize(("scheme", "kh"), [
+    ("explicit_euler", 1.0),  # energy grows by 1 + (kh)² = 2 per step and soon leaves the bound
+    ("gauss_legendre4", 4.0),  # beyond the fixed-point solve's limit 2√3: the first step returns NaN
+])
+def test_c_loop_reports_divergence_like_the_kernel(c_loops, scheme: str, kh: float) -> None:
+    pair = LoopPair(c_loops, "linear", scheme, n_steps=10_000)
+    pair.h *= kh / KH
     kernel_status, kernel_steps, *_ = pair.numba(False)
     result = pair.c(False)
     assert kernel_status == result.status == 1

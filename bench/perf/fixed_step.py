@@ -1,10 +1,11 @@
 """Section ``loops``: the fixed-step loops against the hardware.
 
-For explicit Euler, symplectic Euler, RK4 and Verlet on the linear and the spherical model, the cost per step
+For every fixed-step scheme (``c_loops.SCHEMES``) on the linear and the spherical model, the cost per step
 of the suite's compiled loop (``FixedStepIntegrator.kernel``, the one ``solve`` runs) with verdicts off
 (``monitor=False``) and on (streamed energy error, drift slope and turning points), against the plain scalar C
 loop of the same scheme (``loops.c``: the model arithmetic of the suite, the scheme and loop as a C programmer
-writes them for speed, e.g. the sphere Verlet's rotation as a precomputed 3×3 matrix). Targets: ≤ 1.05× the
+writes them for speed, e.g. the sphere Verlet's rotation as a precomputed 3×3 matrix, a composition's merged
+rotations between its sub-steps). Targets: ≤ 1.05× the
 C loop with verdicts off (what the runner times: ``monitor=False``), ≤ 1.5× with verdicts on. The C loop with
 the same streaming (``_monitor`` in ``loops.c``) is shown too: it separates what the streaming arithmetic
 costs on the hardware from what numba adds.

@@ -4,15 +4,21 @@
  * models/base.py): every expression keeps the operand order of its Python twin, including the multiplications
  * by the zero velocities and zero rotation components that the one-source models carry, so that a C loop and
  * the numba kernel compute the same states (bitwise: neither contracts a*b+c into an FMA). The schemes
- * (integrators/{explicit_euler,symplectic_euler,rk4,verlet}.py) and the loop (integrators/fixed_step.py) are
- * written as a C programmer writes them for speed:
- *   - every loop invariant computed once before the loop: the parameters read into local scalars, the plane
- *     Verlet rotation's cosine and sine, and the sphere Verlet's rotation by -|w| h/2 as a 3x3 matrix
- *     (R = cos a I + sin a [n]x + (1 - cos a) n n^T; 9 multiplications and 6 additions per rotation instead of
- *     Rodrigues' vector form), which the numba step computes the same way (integrators/verlet.py);
+ * (integrators/{explicit_euler,symplectic_euler,rk4,verlet,yoshida4,composition6,boris,gauss}.py) and the loop
+ * (integrators/fixed_step.py) are written as a C programmer writes them for speed:
+ *   - every loop invariant computed once before the loop (make_consts, <scheme>_setup): the parameters read
+ *     into local scalars, sqrt(k2) for the Gauss solves, the Boris rotation's cosine and sine, and for the
+ *     Verlet sequences each sub-step gamma_i h and each rotation, on the plane as a cosine and sine, on the
+ *     sphere as a 3x3 matrix (R = cos a I + sin a [n]x + (1 - cos a) n n^T; 9 multiplications and 6 additions
+ *     per rotation instead of Rodrigues' vector form's 18 and 12);
+ *   - a composition (yoshida4: 3 Verlet sub-steps, composition6: 9) stays in the canonical variables from its
+ *     first sub-step to its last and merges the two half rotations between neighbouring sub-steps into one
+ *     (rotations about one axis add): s + 1 rotations of r and p per step instead of 2s, and one change of
+ *     variables (v <-> p) instead of s;
  *   - four scalar doubles of state, two nested loops (output rows, steps per row: no modulo per step), the
  *     divergence test after every step, the state written to `out` once per row;
  *   - sqrt, not pow(x, 0.5).
+ * The numba steps compute the same way (integrators/verlet.py verlet_sequence), so the states stay bitwise equal.
  *
  * Each (model, scheme) pair exports two functions:
  *   fb_<model>_<scheme>(state0, p, h, n_steps, stride, out, radius_bound, steps_done) -> status
@@ -21,35 +27,82 @@
  * ingredients as the kernel (max relative energy error, Welford slope, turning points on the cubic Hermite
  * interpolant).
  */
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 
+#define MAX_SUB_STEPS 9 /* composition6 */
+
 typedef struct {
     double g, length, k2, wx, wy, wz, c;  /* models/parameters.py PARAMETER_VECTOR_NAMES */
-    double cos_half, sin_half;            /* plane Verlet: rotation by -a h/2 about z */
-    double rot[9];                        /* sphere Verlet: rotation by -|w| h/2 about w, row-major */
+    double k;                             /* sqrt(k2): the Gauss solves' norm */
+    /* Verlet sequences (integrators/verlet.py verlet_sequence): sub-steps gamma_i h and the merged rotations */
+    double sub_h[MAX_SUB_STEPS];
+    double cos_r[MAX_SUB_STEPS + 1], sin_r[MAX_SUB_STEPS + 1]; /* plane: rotation by -c_i a h about z */
+    double rot[MAX_SUB_STEPS + 1][9];                          /* sphere: rotation by -c_i |w| h, row-major */
+    double cos_boris, sin_boris;                               /* plane Boris: velocity turned by -2 a h */
 } consts;
 
-static consts make_consts(const double *p, double h) {
+static consts make_consts(const double *p) {
     consts k;
     k.g = p[0]; k.length = p[1]; k.k2 = p[2]; k.wx = p[3]; k.wy = p[4]; k.wz = p[5]; k.c = p[6];
-    k.cos_half = cos(-0.5 * k.wz * h);
-    k.sin_half = sin(-0.5 * k.wz * h);
-    /* integrators/verlet.py _half_step_rotation: R = cos a I + sin a [n]x + (1 - cos a) n n^T */
-    double rate = sqrt(k.wx * k.wx + k.wy * k.wy + k.wz * k.wz);
-    if (rate == 0.0) {
-        const double identity[9] = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
-        for (int i = 0; i < 9; i++) k.rot[i] = identity[i];
-        return k;
-    }
-    double nx = k.wx / rate, ny = k.wy / rate, nz = k.wz / rate;
-    double angle = -0.5 * rate * h;
-    double cos_a = cos(angle), sin_a = sin(angle), u = 1.0 - cos_a;
-    k.rot[0] = cos_a + u * nx * nx; k.rot[1] = u * nx * ny - sin_a * nz; k.rot[2] = u * nx * nz + sin_a * ny;
-    k.rot[3] = u * ny * nx + sin_a * nz; k.rot[4] = cos_a + u * ny * ny; k.rot[5] = u * ny * nz - sin_a * nx;
-    k.rot[6] = u * nz * nx - sin_a * ny; k.rot[7] = u * nz * ny + sin_a * nx; k.rot[8] = cos_a + u * nz * nz;
+    k.k = sqrt(k.k2);
     return k;
 }
+
+/* ---- per-scheme constants, computed once per run ---- */
+
+static void no_setup(consts *k, double h) { (void)k; (void)h; }
+
+/* integrators/verlet.py _rotation: R = cos a I + sin a [n]x + (1 - cos a) n n^T, a = -|w| c h */
+static void rotation_matrix(const consts *k, double c, double h, double *r) {
+    double rate = sqrt(k->wx * k->wx + k->wy * k->wy + k->wz * k->wz);
+    if (rate == 0.0) {
+        const double identity[9] = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+        for (int i = 0; i < 9; i++) r[i] = identity[i];
+        return;
+    }
+    double nx = k->wx / rate, ny = k->wy / rate, nz = k->wz / rate;
+    double angle = -c * rate * h;
+    double cos_a = cos(angle), sin_a = sin(angle), u = 1.0 - cos_a;
+    r[0] = cos_a + u * nx * nx; r[1] = u * nx * ny - sin_a * nz; r[2] = u * nx * nz + sin_a * ny;
+    r[3] = u * ny * nx + sin_a * nz; r[4] = cos_a + u * ny * ny; r[5] = u * ny * nz - sin_a * nx;
+    r[6] = u * nz * nx - sin_a * ny; r[7] = u * nz * ny + sin_a * nx; r[8] = cos_a + u * nz * nz;
+}
+
+/* integrators/verlet.py rotation_coefficients: c_0 = g_1/2, c_i = (g_i + g_(i+1))/2, c_n = g_n/2 */
+static void sequence_setup(consts *k, double h, const double *gamma, int n) {
+    for (int i = 0; i < n; i++) k->sub_h[i] = gamma[i] * h;
+    for (int i = 0; i <= n; i++) {
+        double c = i == 0 ? 0.5 * gamma[0] : (i == n ? 0.5 * gamma[n - 1] : 0.5 * (gamma[i - 1] + gamma[i]));
+        double angle = -c * k->wz * h;
+        k->cos_r[i] = cos(angle);
+        k->sin_r[i] = sin(angle);
+        rotation_matrix(k, c, h, k->rot[i]);
+    }
+}
+
+/* integrators/composition.py triple_jump(4): g_1 = g_3 = 1/(2 - 2^(1/3)), g_2 = 1 - 2 g_1 (as Python rounds them) */
+static const double YOSHIDA4[3] = {1.3512071919596578, -1.7024143839193155, 1.3512071919596578};
+/* integrators/composition6.py: Kahan & Li s9odr6a */
+static const double COMPOSITION6[9] = {
+    0.39216144400731413927925056, 0.33259913678935943859974864, -0.70624617255763935980996482,
+    0.08221359629355080023149045, 0.79854399093482996339895035, 0.08221359629355080023149045,
+    -0.70624617255763935980996482, 0.33259913678935943859974864, 0.39216144400731413927925056};
+static const double VERLET[1] = {1.0};
+
+static void verlet_setup(consts *k, double h) { sequence_setup(k, h, VERLET, 1); }
+static void yoshida4_setup(consts *k, double h) { sequence_setup(k, h, YOSHIDA4, 3); }
+static void composition6_setup(consts *k, double h) { sequence_setup(k, h, COMPOSITION6, 9); }
+static void boris_setup(consts *k, double h) {
+    k->cos_boris = cos(-2.0 * k->wz * h);
+    k->sin_boris = sin(-2.0 * k->wz * h);
+}
+#define explicit_euler_setup no_setup
+#define symplectic_euler_setup no_setup
+#define rk4_setup no_setup
+#define implicit_midpoint_setup no_setup
+#define gauss_legendre4_setup no_setup
 
 /* ---- models: free force, geometry, energy (models/linear.py, models/spherical.py, models/base.py) ---- */
 
@@ -165,32 +218,37 @@ DEFINE_KICK(spherical, k->wx, k->wy)
 DEFINE_RUNGE_KUTTA_STEPS(linear)
 DEFINE_RUNGE_KUTTA_STEPS(spherical)
 
-/* integrators/verlet.py _plane_step (Hamiltonian planar model) */
-static inline void linear_verlet_step(const consts *k, double h, double *px_, double *py_, double *pvx,
-                                      double *pvy) {
-    double a = k->wz, c = k->cos_half, s = k->sin_half, x = *px_, y = *py_, t, fx, fy, fz;
-    double px = *pvx - a * y, py = *pvy + a * x;
+/* ---- Verlet sequences (integrators/verlet.py verlet_sequence): Verlet, yoshida4, composition6 ---- */
+
+/* plane: canonical p = v + a z x r; per sub-step the merged rotation then kick, drift, kick */
+static inline void linear_sequence(const consts *k, int n, double *x_, double *y_, double *vx_, double *vy_) {
+    double a = k->wz, x = *x_, y = *y_, t, c, s, fx, fy, fz;
+    double px = *vx_ - a * y, py = *vy_ + a * x;
+    for (int i = 0; i < n; i++) {
+        double h = k->sub_h[i];
+        c = k->cos_r[i]; s = k->sin_r[i];
+        t = c * x - s * y; y = s * x + c * y; x = t;
+        t = c * px - s * py; py = s * px + c * py; px = t;
+        linear_kick(k, x, y, 0.0, &fx, &fy, &fz);
+        px += 0.5 * h * fx;
+        py += 0.5 * h * fy;
+        x += h * px;
+        y += h * py;
+        linear_kick(k, x, y, 0.0, &fx, &fy, &fz);
+        px = px + 0.5 * h * fx;
+        py = py + 0.5 * h * fy;
+    }
+    c = k->cos_r[n]; s = k->sin_r[n];
     t = c * x - s * y; y = s * x + c * y; x = t;
     t = c * px - s * py; py = s * px + c * py; px = t;
-    linear_kick(k, x, y, 0.0, &fx, &fy, &fz);
-    px += 0.5 * h * fx;
-    py += 0.5 * h * fy;
-    x += h * px;
-    y += h * py;
-    linear_kick(k, x, y, 0.0, &fx, &fy, &fz);
-    px = px + 0.5 * h * fx;
-    py = py + 0.5 * h * fy;
-    t = c * x - s * y; y = s * x + c * y; x = t;
-    t = c * px - s * py; py = s * px + c * py; px = t;
-    *px_ = x;
-    *py_ = y;
-    *pvx = px + a * y;
-    *pvy = py - a * x;
+    *x_ = x;
+    *y_ = y;
+    *vx_ = px + a * y;
+    *vy_ = py - a * x;
 }
 
-/* integrators/verlet.py _rotate: the precomputed 3x3 matrix applied (9 multiplications, 6 additions) */
-static inline void rotate(const consts *k, double *vx, double *vy, double *vz) {
-    const double *r = k->rot;
+/* the precomputed 3x3 matrix applied (9 multiplications, 6 additions) */
+static inline void rotate(const double *r, double *vx, double *vy, double *vz) {
     double rx = r[0] * *vx + r[1] * *vy + r[2] * *vz;
     double ry = r[3] * *vx + r[4] * *vy + r[5] * *vz;
     double rz = r[6] * *vx + r[7] * *vy + r[8] * *vz;
@@ -199,40 +257,224 @@ static inline void rotate(const consts *k, double *vx, double *vy, double *vz) {
     *vz = rz;
 }
 
-/* integrators/verlet.py _sphere_step (RATTLE between two exact rotations) */
-static inline void spherical_verlet_step(const consts *k, double h, double *px_, double *py_, double *pvx,
-                                         double *pvy) {
+/* sphere: canonical p = v + w x r in 3-D; per sub-step the merged rotation then RATTLE */
+static inline void spherical_sequence(const consts *k, int n, double *x_, double *y_, double *vx_, double *vy_) {
     double wx = k->wx, wy = k->wy, wz = k->wz, length = k->length, l2 = length * length;
-    double x = *px_, y = *py_, vx = *pvx, vy = *pvy, fx, fy, fz;
+    double x = *x_, y = *y_, vx = *vx_, vy = *vy_, fx, fy, fz;
     double z = -sqrt(l2 - x * x - y * y);
     double vz = -(x * vx + y * vy) / z;
     double px = vx + wy * z - wz * y, py = vy + wz * x - wx * z, pz = vz + wx * y - wy * x;
-    rotate(k, &x, &y, &z);
-    rotate(k, &px, &py, &pz);
-    spherical_kick(k, x, y, z, &fx, &fy, &fz);
-    double qx = x + h * (px + 0.5 * h * fx), qy = y + h * (py + 0.5 * h * fy), qz = z + h * (pz + 0.5 * h * fz);
-    double qr = qx * x + qy * y + qz * z;
-    double excess = qx * qx + qy * qy + qz * qz - l2;
-    double cc = -excess / (qr + sqrt(qr * qr - l2 * excess));
-    double xn = qx + cc * x, yn = qy + cc * y, zn = qz + cc * z;
-    px = (xn - x) / h;
-    py = (yn - y) / h;
-    pz = (zn - z) / h;
-    spherical_kick(k, xn, yn, zn, &fx, &fy, &fz);
-    px += 0.5 * h * fx;
-    py += 0.5 * h * fy;
-    pz += 0.5 * h * fz;
-    double nu = -(xn * px + yn * py + zn * pz) / l2;
-    px += nu * xn;
-    py += nu * yn;
-    pz += nu * zn;
-    rotate(k, &xn, &yn, &zn);
-    rotate(k, &px, &py, &pz);
-    *px_ = xn;
-    *py_ = yn;
-    *pvx = px - (wy * zn - wz * yn);
-    *pvy = py - (wz * xn - wx * zn);
+    for (int i = 0; i < n; i++) {
+        double h = k->sub_h[i];
+        rotate(k->rot[i], &x, &y, &z);
+        rotate(k->rot[i], &px, &py, &pz);
+        spherical_kick(k, x, y, z, &fx, &fy, &fz);
+        double qx = x + h * (px + 0.5 * h * fx), qy = y + h * (py + 0.5 * h * fy), qz = z + h * (pz + 0.5 * h * fz);
+        double qr = qx * x + qy * y + qz * z;
+        double excess = qx * qx + qy * qy + qz * qz - l2;
+        double cc = -excess / (qr + sqrt(qr * qr - l2 * excess));
+        double xn = qx + cc * x, yn = qy + cc * y, zn = qz + cc * z;
+        px = (xn - x) / h;
+        py = (yn - y) / h;
+        pz = (zn - z) / h;
+        spherical_kick(k, xn, yn, zn, &fx, &fy, &fz);
+        px += 0.5 * h * fx;
+        py += 0.5 * h * fy;
+        pz += 0.5 * h * fz;
+        double nu = -(xn * px + yn * py + zn * pz) / l2;
+        px += nu * xn;
+        py += nu * yn;
+        pz += nu * zn;
+        x = xn; y = yn; z = zn;
+    }
+    rotate(k->rot[n], &x, &y, &z);
+    rotate(k->rot[n], &px, &py, &pz);
+    *x_ = x;
+    *y_ = y;
+    *vx_ = px - (wy * z - wz * y);
+    *vy_ = py - (wz * x - wx * z);
 }
+
+#define DEFINE_SEQUENCE_STEPS(model)                                                                          \
+    static inline void model##_verlet_step(const consts *k, double h, double *x, double *y, double *vx,      \
+                                           double *vy) {                                                     \
+        (void)h;                                                                                              \
+        model##_sequence(k, 1, x, y, vx, vy);                                                                 \
+    }                                                                                                         \
+    static inline void model##_yoshida4_step(const consts *k, double h, double *x, double *y, double *vx,    \
+                                             double *vy) {                                                   \
+        (void)h;                                                                                              \
+        model##_sequence(k, 3, x, y, vx, vy);                                                                 \
+    }                                                                                                         \
+    static inline void model##_composition6_step(const consts *k, double h, double *x, double *y,            \
+                                                 double *vx, double *vy) {                                   \
+        (void)h;                                                                                              \
+        model##_sequence(k, 9, x, y, vx, vy);                                                                 \
+    }
+DEFINE_SEQUENCE_STEPS(linear)
+DEFINE_SEQUENCE_STEPS(spherical)
+
+/* ---- Boris (integrators/boris.py): drift, half kick, Coriolis rotation of v, half kick, drift ---- */
+
+static inline void linear_boris_step(const consts *k, double h, double *x_, double *y_, double *vx_,
+                                     double *vy_) {
+    double half = 0.5 * h, x = *x_, y = *y_, vx = *vx_, vy = *vy_, fx, fy, fz, t;
+    double c = k->cos_boris, s = k->sin_boris;
+    x += half * vx;
+    y += half * vy;
+    linear_force(k, x, y, 0.0, 0.0, 0.0, 0.0, &fx, &fy, &fz);
+    vx += half * fx;
+    vy += half * fy;
+    t = c * vx - s * vy; vy = s * vx + c * vy; vx = t;
+    vx = vx + half * fx;
+    vy = vy + half * fy;
+    *x_ = x + half * vx;
+    *y_ = y + half * vy;
+    *vx_ = vx;
+    *vy_ = vy;
+}
+
+/* integrators/boris.py _geodesic: a great circle at constant speed for a time tau */
+static inline void geodesic(double *x, double *y, double *z, double *vx, double *vy, double *vz, double length,
+                            double tau) {
+    double speed = sqrt(*vx * *vx + *vy * *vy + *vz * *vz);
+    if (speed == 0.0) return;
+    double angle = speed * tau / length;
+    double cos_a = cos(angle), sin_a = sin(angle);
+    double along = length / speed * sin_a, back = -speed / length * sin_a;
+    double xn = *x * cos_a + *vx * along, yn = *y * cos_a + *vy * along, zn = *z * cos_a + *vz * along;
+    *vx = *x * back + *vx * cos_a;
+    *vy = *y * back + *vy * cos_a;
+    *vz = *z * back + *vz * cos_a;
+    *x = xn;
+    *y = yn;
+    *z = zn;
+}
+
+static inline void spherical_boris_step(const consts *k, double h, double *x_, double *y_, double *vx_,
+                                        double *vy_) {
+    double half = 0.5 * h, length = k->length, wx = k->wx, wy = k->wy, wz = k->wz;
+    double x = *x_, y = *y_, vx = *vx_, vy = *vy_, fx, fy, fz;
+    double z = -sqrt(length * length - x * x - y * y);
+    double vz = -(x * vx + y * vy) / z;
+    geodesic(&x, &y, &z, &vx, &vy, &vz, length, half);
+    spherical_force(k, x, y, z, 0.0, 0.0, 0.0, &fx, &fy, &fz);
+    double radial = (fx * x + fy * y + fz * z) / (length * length);
+    fx -= radial * x;
+    fy -= radial * y;
+    fz -= radial * z;
+    vx += half * fx;
+    vy += half * fy;
+    vz += half * fz;
+    double nx = x / length, ny = y / length, nz = z / length;
+    double angle = -2.0 * (wx * nx + wy * ny + wz * nz) * h;
+    double cos_a = cos(angle), sin_a = sin(angle);
+    double tx = cos_a * vx + sin_a * (ny * vz - nz * vy);
+    double ty = cos_a * vy + sin_a * (nz * vx - nx * vz);
+    double tz = cos_a * vz + sin_a * (nx * vy - ny * vx);
+    vx = tx + half * fx;
+    vy = ty + half * fy;
+    vz = tz + half * fz;
+    geodesic(&x, &y, &z, &vx, &vy, &vz, length, half);
+    *x_ = x;
+    *y_ = y;
+    *vx_ = vx;
+    *vy_ = vy;
+}
+
+/* ---- Gauss-Legendre collocation, fixed-point solve to round-off (integrators/gauss.py) ---- */
+
+#define HALF_ULP (0.5 * DBL_EPSILON)
+#define STALL_SWEEPS 8
+#define CONVERGED_INCREMENT 1.0e-12
+#define DIVERGED_INCREMENT 1.0e3
+#define MAX_SWEEPS 100000
+#define SQRT3 1.7320508075688772 /* math.sqrt(3.0) */
+#define A11 0.25
+#define A12 (0.25 - SQRT3 / 6.0)
+#define A21 (0.25 + SQRT3 / 6.0)
+#define A22 0.25
+
+static inline double norm(double dx, double dy, double dvx, double dvy, double k, double scale) {
+    return sqrt(k * k * (dx * dx + dy * dy) + dvx * dvx + dvy * dvy) / scale;
+}
+
+/* gauss.py _sweep_verdict: 1 when the iteration is done; *converged says how */
+static inline int sweep_verdict(double increment, double previous, double *smallest, int *stalled, int *converged) {
+    if (increment < *smallest) {
+        *smallest = increment;
+        *stalled = 0;
+    } else {
+        (*stalled)++;
+    }
+    double contraction = increment / previous;
+    double remaining = (0.0 < contraction && contraction < 1.0) ? increment * contraction / (1.0 - contraction)
+                                                                : INFINITY;
+    if (increment == 0.0 || remaining <= HALF_ULP || (*stalled >= STALL_SWEEPS && *smallest <= CONVERGED_INCREMENT)) {
+        *converged = 1;
+        return 1;
+    }
+    *converged = 0;
+    return increment > DIVERGED_INCREMENT;
+}
+
+#define DEFINE_GAUSS_STEPS(model)                                                                             \
+    static inline void model##_implicit_midpoint_step(const consts *k, double h, double *x_, double *y_,     \
+                                                      double *vx_, double *vy_) {                            \
+        double x = *x_, y = *y_, vx = *vx_, vy = *vy_, ax, ay, kk = k->k;                                     \
+        model##_acceleration(k, x, y, vx, vy, &ax, &ay);                                                      \
+        double scale = kk * (fabs(x) + fabs(y)) + fabs(vx) + fabs(vy) + 1e-300;                               \
+        double zx = 0.5 * h * vx, zy = 0.5 * h * vy, zvx = 0.5 * h * ax, zvy = 0.5 * h * ay;                  \
+        double smallest = INFINITY, previous = INFINITY;                                                      \
+        int stalled = 0, converged = 0;                                                                       \
+        for (int sweep = 0; sweep < MAX_SWEEPS; sweep++) {                                                    \
+            double mvx = vx + zvx, mvy = vy + zvy, max_, may;                                                 \
+            model##_acceleration(k, x + zx, y + zy, mvx, mvy, &max_, &may);                                   \
+            double nx = 0.5 * h * mvx, ny = 0.5 * h * mvy, nvx = 0.5 * h * max_, nvy = 0.5 * h * may;         \
+            double increment = norm(nx - zx, ny - zy, nvx - zvx, nvy - zvy, kk, scale);                       \
+            zx = nx; zy = ny; zvx = nvx; zvy = nvy;                                                           \
+            if (sweep_verdict(increment, previous, &smallest, &stalled, &converged)) break;                   \
+            previous = increment;                                                                             \
+        }                                                                                                     \
+        if (!converged) { *x_ = *y_ = *vx_ = *vy_ = NAN; return; }                                            \
+        *x_ = x + 2.0 * zx;                                                                                   \
+        *y_ = y + 2.0 * zy;                                                                                   \
+        *vx_ = vx + 2.0 * zvx;                                                                                \
+        *vy_ = vy + 2.0 * zvy;                                                                                \
+    }                                                                                                         \
+    static inline void model##_gauss_legendre4_step(const consts *k, double h, double *x_, double *y_,       \
+                                                    double *vx_, double *vy_) {                              \
+        double x = *x_, y = *y_, vx = *vx_, vy = *vy_, ax, ay, kk = k->k;                                     \
+        model##_acceleration(k, x, y, vx, vy, &ax, &ay);                                                      \
+        double scale = kk * (fabs(x) + fabs(y)) + fabs(vx) + fabs(vy) + 1e-300;                               \
+        double k1x = vx, k1y = vy, k1vx = ax, k1vy = ay, k2x = vx, k2y = vy, k2vx = ax, k2vy = ay;            \
+        double smallest = INFINITY, previous = INFINITY;                                                      \
+        int stalled = 0, converged = 0;                                                                       \
+        for (int sweep = 0; sweep < MAX_SWEEPS; sweep++) {                                                    \
+            double u1x = vx + h * (A11 * k1vx + A12 * k2vx), u1y = vy + h * (A11 * k1vy + A12 * k2vy);        \
+            double u2x = vx + h * (A21 * k1vx + A22 * k2vx), u2y = vy + h * (A21 * k1vy + A22 * k2vy);        \
+            double b1x, b1y, b2x, b2y;                                                                        \
+            model##_acceleration(k, x + h * (A11 * k1x + A12 * k2x), y + h * (A11 * k1y + A12 * k2y), u1x,    \
+                                 u1y, &b1x, &b1y);                                                            \
+            model##_acceleration(k, x + h * (A21 * k1x + A22 * k2x), y + h * (A21 * k1y + A22 * k2y), u2x,    \
+                                 u2y, &b2x, &b2y);                                                            \
+            double increment = hypot(                                                                         \
+                norm(h * (u1x - k1x), h * (u1y - k1y), h * (b1x - k1vx), h * (b1y - k1vy), kk, scale),        \
+                norm(h * (u2x - k2x), h * (u2y - k2y), h * (b2x - k2vx), h * (b2y - k2vy), kk, scale));       \
+            k1x = u1x; k1y = u1y; k1vx = b1x; k1vy = b1y;                                                     \
+            k2x = u2x; k2y = u2y; k2vx = b2x; k2vy = b2y;                                                     \
+            if (sweep_verdict(increment, previous, &smallest, &stalled, &converged)) break;                   \
+            previous = increment;                                                                             \
+        }                                                                                                     \
+        if (!converged) { *x_ = *y_ = *vx_ = *vy_ = NAN; return; }                                            \
+        double half = 0.5 * h;                                                                                \
+        *x_ = x + half * (k1x + k2x);                                                                         \
+        *y_ = y + half * (k1y + k2y);                                                                         \
+        *vx_ = vx + half * (k1vx + k2vx);                                                                     \
+        *vy_ = vy + half * (k1vy + k2vy);                                                                     \
+    }
+DEFINE_GAUSS_STEPS(linear)
+DEFINE_GAUSS_STEPS(spherical)
 
 /* ---- turning points (integrators/fixed_step.py _hermite, _turning_point) ---- */
 
@@ -269,7 +511,8 @@ static void turning_point(double x0, double y0, double vx0, double vy0, double x
 #define DEFINE_LOOPS(model, scheme)                                                                           \
     int fb_##model##_##scheme(const double *state0, const double *p, double h, int64_t n_steps,              \
                               int64_t stride, double *out, double radius_bound, int64_t *steps_done) {       \
-        const consts k = make_consts(p, h);                                                                   \
+        consts k = make_consts(p);                                                                            \
+        scheme##_setup(&k, h);                                                                                \
         const double bound2 = radius_bound * radius_bound;                                                    \
         double x = state0[0], y = state0[1], vx = state0[2], vy = state0[3];                                  \
         out[0] = x; out[1] = y; out[2] = vx; out[3] = vy;                                                     \
@@ -291,7 +534,8 @@ static void turning_point(double x0, double y0, double vx0, double vy0, double x
                                         int64_t stride, double *out, double radius_bound, int64_t *steps_done,\
                                         double *turning, int64_t n_turning_max, int64_t *n_turning,          \
                                         double *max_rel_out, double *slope_out) {                            \
-        const consts k = make_consts(p, h);                                                                   \
+        consts k = make_consts(p);                                                                            \
+        scheme##_setup(&k, h);                                                                                \
         const double bound2 = radius_bound * radius_bound;                                                    \
         double x = state0[0], y = state0[1], vx = state0[2], vy = state0[3];                                  \
         out[0] = x; out[1] = y; out[2] = vx; out[3] = vy;                                                     \
@@ -343,7 +587,17 @@ DEFINE_LOOPS(linear, explicit_euler)
 DEFINE_LOOPS(linear, symplectic_euler)
 DEFINE_LOOPS(linear, rk4)
 DEFINE_LOOPS(linear, verlet)
+DEFINE_LOOPS(linear, yoshida4)
+DEFINE_LOOPS(linear, composition6)
+DEFINE_LOOPS(linear, boris)
+DEFINE_LOOPS(linear, implicit_midpoint)
+DEFINE_LOOPS(linear, gauss_legendre4)
 DEFINE_LOOPS(spherical, explicit_euler)
 DEFINE_LOOPS(spherical, symplectic_euler)
 DEFINE_LOOPS(spherical, rk4)
 DEFINE_LOOPS(spherical, verlet)
+DEFINE_LOOPS(spherical, yoshida4)
+DEFINE_LOOPS(spherical, composition6)
+DEFINE_LOOPS(spherical, boris)
+DEFINE_LOOPS(spherical, implicit_midpoint)
+DEFINE_LOOPS(spherical, gauss_legendre4)
