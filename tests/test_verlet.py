@@ -76,3 +76,23 @@ def test_verlet_precession_error_on_the_sphere_depends_on_the_release_direction(
     assert errors[0.05][0.0] / errors[0.025][0.0] == pytest.approx(4.0, rel=0.15)
     for kh in errors:
         assert errors[kh][0.0] >= 10 * errors[kh][90.0]
+
+
+@pytest.mark.parametrize("model", sorted(MODELS))
+@pytest.mark.parametrize("name", ["yoshida4", "composition6"])
+def test_a_composition_step_is_its_verlet_sub_steps_in_a_row(model: str, name: str) -> None:
+    """A composition step merges the half rotations of neighbouring sub-steps and stays in canonical variables
+    (``verlet_sequence``); it must be the same map as the Verlet steps γ₁h, …, γₛh taken one after the other,
+    to round-off. Released off-axis with a sideways velocity, so that every component of the state moves."""
+    composition = get_integrator(name)
+    step = composition.compiled_step(MODELS[model])
+    verlet = get_integrator("verlet").compiled_step(MODELS[model])
+    p = tuple(PARIS.parameter_vector())
+    h = 0.3 / PARIS.pendulum_frequency_rad_s
+    state = (2.0, 1.5, 0.1, -0.2)
+    in_a_row = state
+    for gamma in composition.composition.weights:
+        in_a_row = verlet(*in_a_row, gamma * h, p)
+    composed = step(*state, h, p)
+    scale = np.array([3.0, 3.0, 3.0 * PARIS.pendulum_frequency_rad_s, 3.0 * PARIS.pendulum_frequency_rad_s])
+    assert np.all(np.abs(np.subtract(composed, in_a_row)) <= 1e-14 * scale)
