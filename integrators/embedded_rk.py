@@ -24,8 +24,10 @@ common.py, ivp.py) step for step, in numba with scalars and arrays allocated onc
   Σⱼ aᵢⱼkⱼ as OpenBLAS's ``dgemv_n`` (blocks of four terms as two fused multiply-add chains, then a pair, then a
   single term), a matrix product as its small ``dgemm`` (one fused chain in order), the dense polynomial at one
   time as its ``dgemv_t`` ((q₀p₀ + q₂p₂) + (q₁p₁ + q₃p₃)), a norm as ``np.linalg.norm`` (in order, unfused).
-  With numpy on OpenBLAS's x86-64 kernels (the PyPI wheels) every step size, accept/reject decision, output
-  state and turning point is then bitwise scipy's; with another BLAS the same algorithm agrees to round-off.
+  With numpy on OpenBLAS's Haswell or Zen kernel (the PyPI wheels; OpenBLAS takes its SkylakeX kernel, which
+  orders the stage sums otherwise, where it detects AVX-512) every step size, accept/reject decision, output
+  state and turning point is then bitwise scipy's; with another kernel or BLAS the same algorithm agrees to
+  round-off (integrators/README.md "Compiled embedded Runge-Kutta pairs").
 
 ``EmbeddedRungeKutta`` is the integrator base: a subclass declares ``tableau`` and its facts and registers.
 """

@@ -56,7 +56,7 @@ class RotatingVerlet(FixedStepIntegrator):
     symplectic: ClassVar[bool] = True
     reference: ClassVar[str] = (
         "Störmer-Verlet + exact rotation (Strang splitting), RATTLE on the sphere; Hairer, Lubich & Wanner, "
-        "Geometric Numerical Integration, 2nd ed., §I.3, §II.5, §VII.1.4"
+        "Geometric Numerical Integration, 2nd ed., §I.1.4, §II.5, §VII.1.4, and Acta Numerica 12, 399 (2003)"
     )
 
     def make_step(self, model: Model) -> Callable:

@@ -42,6 +42,14 @@ def rule(check: Callable[[Any, "PendulumParameters"], bool] | None = None, requi
     return {"check": check, "requirement": requirement, "kind": kind}
 
 
+def airy_fraction(swing_angle_rad: float) -> float:
+    """(3/8)θ₀²: by how much (relative) a spherical pendulum released from rest at the angle θ₀ precesses slower
+    than −Ω_E sin φ, to leading order (G. B. Airy, "On the vibration of a free pendulum in an oval differing
+    little from a straight line", Mem. R. Astron. Soc. 20, 121-130, 1851; M. G. Olsson, Am. J. Phys. 49, 531,
+    1981)."""
+    return 0.375 * swing_angle_rad**2
+
+
 @dataclass(frozen=True)
 class PendulumParameters:
     """One pendulum at one place, released at a given amplitude and azimuth.
@@ -112,6 +120,18 @@ class PendulumParameters:
     def textbook_precession_rate_rad_s(self) -> float:
         """−Ω_E sin φ (rad/s), counter-clockwise about local up positive (models/README.md "Frames and conventions")."""
         return -self.vertical_rate_rad_s
+
+    @property
+    def swing_angle_rad(self) -> float:
+        """θ₀ = A/L, the release amplitude as an angle to the order the finite-swing corrections need."""
+        return self.amplitude_m / self.length_m
+
+    @property
+    def airy_precession_rate_rad_s(self) -> float:
+        """Airy's precession rate of a spherical pendulum released from rest, −Ω_E sin φ (1 − (3/8)θ₀²) (rad/s):
+        the Coriolis force opens the swing into a thin ellipse, whose own precession runs against the Earth's by
+        (3/8)θ₀² of it (``airy_fraction``; models/README.md "Airy precession")."""
+        return self.textbook_precession_rate_rad_s * (1.0 - airy_fraction(self.swing_angle_rad))
 
     @property
     def pendulum_frequency_rad_s(self) -> float:

@@ -41,7 +41,7 @@ from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
 from foucault_bench.integrators import STATUS_OK, Problem, get_integrator
 from foucault_bench.integrators.registry import REGISTRY
-from foucault_bench.models import PendulumParameters, get_model
+from foucault_bench.models import get_model
 from foucault_bench.models.analytic import linear_exact
 from foucault_bench.reports.charts import integrator_style
 from foucault_bench.reports.simulation_settings import SimulationSettings
@@ -82,7 +82,8 @@ class SimulationResult:
     status: str
     message: str
     airy_rate_rad_s: float | None = None
-    """Airy's finite-amplitude rate for the spherical model (``airy_rate``), ``None`` for the planar models."""
+    """Airy's finite-amplitude rate for the spherical model (``PendulumParameters.airy_precession_rate_rad_s``),
+    ``None`` for the planar models."""
 
     @property
     def plane_rate_rad_s(self) -> float:
@@ -95,16 +96,6 @@ class SimulationResult:
         reach = np.hypot(self.numeric[:, 0], self.numeric[:, 1])
         outside = ~(reach <= VIEW_BOUND * self.settings.amplitude_m)
         return int(np.argmax(outside)) if outside.any() else len(self.t_s)
-
-
-def airy_rate(params: PendulumParameters) -> float:
-    """Airy's precession rate of a spherical pendulum released from rest, −Ω_E sin φ (1 − (3/8)θ₀²) (rad/s),
-    with θ₀ = A/L to this order (G. B. Airy, "On the vibration of a free pendulum in an oval differing little
-    from a straight line", Mem. R. Astron. Soc. 20, 121-130, 1851; H. R. Olsson, Am. J. Phys. 49, 531, 1981):
-    the Coriolis force opens the swing into a thin ellipse, whose own precession runs against the Earth's by
-    (3/8)θ₀² of it."""
-    theta0 = params.amplitude_m / params.length_m
-    return params.textbook_precession_rate_rad_s * (1.0 - 0.375 * theta0**2)
 
 
 def simulate(settings: SimulationSettings) -> SimulationResult:
@@ -129,7 +120,7 @@ def simulate(settings: SimulationSettings) -> SimulationResult:
                             turning_points=points, measured_rate_rad_s=rate, measured_rate_stderr_rad_s=stderr,
                             expected_rate_rad_s=params.textbook_precession_rate_rad_s, status=solution.status,
                             message=solution.message,
-                            airy_rate_rad_s=airy_rate(params) if settings.model == "spherical" else None)
+                            airy_rate_rad_s=params.airy_precession_rate_rad_s if settings.model == "spherical" else None)
 
 
 def map_view(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -268,7 +268,6 @@ def precession_vs_latitude(config: PrecessionLatitudeConfig = PrecessionLatitude
     for t_chunk in _progress(list(chunks), "precession vs latitude", progress):
         batch.propagate_until(float(t_chunk))
     rows = []
-    theta0 = config.amplitude_m / config.length_m
     for lat, p, points in zip(latitudes, params, turning):
         rate, stderr = precession_rate(np.array(points, dtype=np.float64).reshape(-1, 3))
         rows.append({
@@ -276,7 +275,7 @@ def precession_vs_latitude(config: PrecessionLatitudeConfig = PrecessionLatitude
             "rate_rad_s": rate,
             "rate_stderr_rad_s": stderr,
             "textbook_rate_rad_s": p.textbook_precession_rate_rad_s,
-            "airy_rate_rad_s": p.textbook_precession_rate_rad_s * (1.0 - 0.375 * theta0 ** 2),
+            "airy_rate_rad_s": p.airy_precession_rate_rad_s,
             "turning_points": len(points),
         })
     return _with_config_columns(pd.DataFrame(rows), config, exclude=())

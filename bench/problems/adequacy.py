@@ -32,6 +32,7 @@ from foucault_bench.bench.problems.scenes import Scene
 from foucault_bench.bench.verdicts.columns import max_position_gap
 from foucault_bench.bench.verdicts.turning_points import rate_scale
 from foucault_bench.models import MODELS, get_model, richer_models, simpler_models
+from foucault_bench.models.parameters import airy_fraction
 
 
 def model_adequacy(scene: Scene) -> list[dict[str, Any]]:
@@ -62,8 +63,8 @@ def _planar_against_sphere(richer: str, simpler: str) -> bool:
 def expected_rate_diff(scene: Scene, richer: str, simpler: str) -> float:
     """Leading-order (simpler − richer) rate difference / (Ω_E|sin φ|): the Airy term for planar vs spherical."""
     if _planar_against_sphere(richer, simpler):
-        theta0 = scene.params.amplitude_m / scene.params.length_m
-        return -math.copysign(1.0, scene.params.latitude_deg) * 0.375 * theta0**2 if scene.params.latitude_deg else 0.0
+        airy = airy_fraction(scene.params.swing_angle_rad)
+        return -math.copysign(1.0, scene.params.latitude_deg) * airy if scene.params.latitude_deg else 0.0
     return math.nan
 
 
@@ -72,8 +73,7 @@ def expected_trajectory_gap(scene: Scene, richer: str, simpler: str) -> float:
     the finite-amplitude frequency shift k θ₀²/16 accumulates, 2|sin(½ Δφ)| (its max over time while Δφ < π)."""
     if _planar_against_sphere(richer, simpler):
         params = scene.params
-        theta0 = params.amplitude_m / params.length_m
-        phase = params.pendulum_frequency_rad_s * theta0**2 / 16.0 * scene.duration_s
+        phase = params.pendulum_frequency_rad_s * params.swing_angle_rad**2 / 16.0 * scene.duration_s
         return 2.0 * abs(math.sin(0.5 * phase)) if phase < math.pi else 2.0
     return math.nan
 
@@ -89,8 +89,7 @@ def _row(scene: Scene, richer: str, simpler: str, richer_reference: Reference,
     note = (f"{simpler} vs {richer} ({side}): precession rate differs by {rate_diff:+.2e} Ω_E|sin φ|, trajectories "
             f"by up to {gap:.2e} A over {scene.duration_s:g} s")
     if math.isfinite(expected_rate):
-        theta0 = scene.params.amplitude_m / scene.params.length_m
-        note += (f"; leading order: Airy {expected_rate:+.2e} (θ₀ = {theta0:.3g}), "
+        note += (f"; leading order: Airy {expected_rate:+.2e} (θ₀ = {scene.params.swing_angle_rad:.3g}), "
                  f"finite-amplitude period {expected_gap:.2e} A")
     elif "seed_planar" in (richer, simpler):
         note += "; the seed's eqs. 4-5 add the vertical-Coriolis tension terms and conserve no energy"
