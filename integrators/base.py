@@ -77,10 +77,21 @@ class Problem:
 
     @property
     def parameter_vector(self) -> np.ndarray:
-        return self.params.parameter_vector()
+        """``params.parameter_vector()``, computed once per problem (a run's repeats solve one problem); a fresh
+        copy on every access, so that no integrator can change what the next one reads."""
+        return self._parameter_vector.copy()
 
     @property
     def initial_state(self) -> np.ndarray:
+        """``params.initial_state()``, computed once per problem; a fresh copy on every access."""
+        return self._initial_state.copy()
+
+    @functools.cached_property
+    def _parameter_vector(self) -> np.ndarray:
+        return self.params.parameter_vector()
+
+    @functools.cached_property
+    def _initial_state(self) -> np.ndarray:
         return self.params.initial_state()
 
 

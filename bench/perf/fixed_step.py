@@ -134,7 +134,7 @@ def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
         note = f"skipped: {missing}"
         return [Row(SECTION, f"{scheme}/{model}", None, "×", TARGET_OFF, note)
                 for model in MODELS for scheme in SCHEMES], [], headers
-    seconds, rounds = (0.02, 3) if quick else (0.1, 7)
+    seconds, rounds = (0.02, 3) if quick else (0.1, 15)
     rows, table = [], []
     for model in MODELS:
         for scheme in SCHEMES:

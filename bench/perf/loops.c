@@ -395,8 +395,8 @@ static inline void spherical_boris_step(const consts *k, double h, double *x_, d
 #define A21 (0.25 + SQRT3 / 6.0)
 #define A22 0.25
 
-static inline double norm(double dx, double dy, double dvx, double dvy, double k, double scale) {
-    return sqrt(k * k * (dx * dx + dy * dy) + dvx * dvx + dvy * dvy) / scale;
+static inline double squared_norm(double dx, double dy, double dvx, double dvy, double k) {
+    return k * k * (dx * dx + dy * dy) + dvx * dvx + dvy * dvy;
 }
 
 /* gauss.py _sweep_verdict: 1 when the iteration is done; *converged says how */
@@ -431,7 +431,7 @@ static inline int sweep_verdict(double increment, double previous, double *small
             double mvx = vx + zvx, mvy = vy + zvy, max_, may;                                                 \
             model##_acceleration(k, x + zx, y + zy, mvx, mvy, &max_, &may);                                   \
             double nx = 0.5 * h * mvx, ny = 0.5 * h * mvy, nvx = 0.5 * h * max_, nvy = 0.5 * h * may;         \
-            double increment = norm(nx - zx, ny - zy, nvx - zvx, nvy - zvy, kk, scale);                       \
+            double increment = sqrt(squared_norm(nx - zx, ny - zy, nvx - zvx, nvy - zvy, kk)) / scale;         \
             zx = nx; zy = ny; zvx = nvx; zvy = nvy;                                                           \
             if (sweep_verdict(increment, previous, &smallest, &stalled, &converged)) break;                   \
             previous = increment;                                                                             \
@@ -458,9 +458,9 @@ static inline int sweep_verdict(double increment, double previous, double *small
                                  u1y, &b1x, &b1y);                                                            \
             model##_acceleration(k, x + h * (A21 * k1x + A22 * k2x), y + h * (A21 * k1y + A22 * k2y), u2x,    \
                                  u2y, &b2x, &b2y);                                                            \
-            double increment = hypot(                                                                         \
-                norm(h * (u1x - k1x), h * (u1y - k1y), h * (b1x - k1vx), h * (b1y - k1vy), kk, scale),        \
-                norm(h * (u2x - k2x), h * (u2y - k2y), h * (b2x - k2vx), h * (b2y - k2vy), kk, scale));       \
+            double increment = sqrt(                                                                          \
+                squared_norm(h * (u1x - k1x), h * (u1y - k1y), h * (b1x - k1vx), h * (b1y - k1vy), kk) +          \
+                squared_norm(h * (u2x - k2x), h * (u2y - k2y), h * (b2x - k2vx), h * (b2y - k2vy), kk)) / scale;  \
             k1x = u1x; k1y = u1y; k1vx = b1x; k1vy = b1y;                                                     \
             k2x = u2x; k2y = u2y; k2vx = b2x; k2vy = b2y;                                                     \
             if (sweep_verdict(increment, previous, &smallest, &stalled, &converged)) break;                   \
