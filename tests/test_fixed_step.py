@@ -100,3 +100,13 @@ def test_bad_settings_raise_value_error_before_running() -> None:
         get_integrator("rk4").solve(problem, tol=1e-6)
     with pytest.raises(ValueError, match="uniform output grid"):
         get_integrator("rk4").solve(Problem(MODELS["linear"], PARIS, np.array([0.0, 1.0, 3.0])), step_s=0.1)
+
+
+def test_a_problem_hands_out_fresh_copies_of_its_vectors() -> None:
+    """A problem computes its parameter vector and initial state once (a run's timed repeats solve one problem)
+    and hands out copies: an integrator that wrote into them could not change what the next solve reads."""
+    problem = Problem(MODELS["linear"], PARIS, np.linspace(0.0, 10.0, 11))
+    problem.parameter_vector[:] = np.nan
+    problem.initial_state[:] = np.nan
+    np.testing.assert_array_equal(problem.parameter_vector, PARIS.parameter_vector())
+    np.testing.assert_array_equal(problem.initial_state, PARIS.initial_state())
