@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
-from typing import Callable
+from typing import Any, Callable, Protocol, cast
 
 import numpy as np
 import pandas as pd
@@ -34,12 +34,18 @@ from tqdm import tqdm
 
 from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR
 from foucault_bench.bench.problems.scenes import SEED_EARTH_RATE_RAD_S
-from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.schema import setting_label
 from foucault_bench.bench.verdicts.columns import energy_scale, energy_verdicts, released_from_rest
 from foucault_bench.bench.verdicts.stability import measured_stability_limit, spectral_growth, step_matrix
 from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
-from foucault_bench.integrators import STATUS_DIVERGED, STATUS_OK, Problem, Solution, get_integrator
+from foucault_bench.integrators import (
+    STATUS_DIVERGED,
+    STATUS_OK,
+    FixedStepIntegrator,
+    Problem,
+    Solution,
+    get_integrator,
+)
 from foucault_bench.integrators.base import COST_COMPILED
 from foucault_bench.integrators.registry import REGISTRY, built_in_names
 from foucault_bench.models import Model, PendulumParameters, get_model
@@ -259,7 +265,7 @@ def stability_sweep(config: StabilitySweepConfig = StabilitySweepConfig(), progr
     cases = [(name, rotation) for name in fixed_step for rotation in (False, True)]
     rows = []
     for name, rotation in _progress(cases, "stability sweep", progress):
-        integrator = REGISTRY[name]
+        integrator = cast(FixedStepIntegrator, REGISTRY[name])  # not adaptive: the one-step map's interface
         params = PendulumParameters(length_m=config.length_m, latitude_deg=config.latitude_deg,
                                     amplitude_m=config.amplitude_m,
                                     earth_rate_rad_s=SIDEREAL_EARTH_RATE_RAD_S if rotation else 0.0)
@@ -346,7 +352,7 @@ def precession_vs_latitude(config: PrecessionLatitudeConfig = PrecessionLatitude
     for t_chunk in _progress(list(chunks), "precession vs latitude", progress):
         batch.propagate_until(float(t_chunk))
     rows = []
-    for lat, p, points in zip(latitudes, params, turning):
+    for lat, p, points in zip(latitudes, params, turning, strict=True):
         rate, stderr = precession_rate(np.array(points, dtype=np.float64).reshape(-1, 3))
         rows.append({
             "latitude_deg": float(lat),
@@ -668,7 +674,17 @@ def stored_version(table: pd.DataFrame) -> int:
     return int(table[STUDY_VERSION_COLUMN].iloc[0])
 
 
-def ensure_studies(store: ResultsStore | None, recompute: bool = False, configs: dict[str, object] | None = None,
+class TableStore(Protocol):
+    """What ``ensure_studies`` needs of a store: ``bench.run.store.ResultsStore``'s named tables."""
+
+    def read_table(self, name: str) -> pd.DataFrame:
+        """The stored table ``name``; ``KeyError`` when there is none."""
+
+    def write_table(self, name: str, frame: pd.DataFrame) -> None:
+        """Store ``frame`` as table ``name``, replacing it."""
+
+
+def ensure_studies(store: TableStore | None, recompute: bool = False, configs: dict[str, object] | None = None,
                    progress: bool = True) -> dict[str, pd.DataFrame]:
     """Every study's table: read from ``store`` (``read_table``) or, when missing, of another ``Study.version``
     or ``recompute``, computed with its config (``configs`` overrides the defaults by study name) and written
@@ -691,7 +707,7 @@ def ensure_studies(store: ResultsStore | None, recompute: bool = False, configs:
     return tables
 
 
-def _with_config_columns(frame: pd.DataFrame, config: object, exclude: tuple[str, ...]) -> pd.DataFrame:
+def _with_config_columns(frame: pd.DataFrame, config: Any, exclude: tuple[str, ...]) -> pd.DataFrame:
     """Add the config's scalar fields as constant columns (``config_<field>``) so a stored table says how it
     was made."""
     for name, value in asdict(config).items():

@@ -136,7 +136,7 @@ def test_measured_limits_match_the_declared_ones_without_rotation(stability_tabl
     Within 1e-3 relative: the implicit schemes' fixed-point solve stops certifying convergence 4e-4 (relative)
     below its limit, where its round-off floor ε/(1 − ρ) rises (``integrators.gauss``)."""
     still = stability_table[~stability_table["rotation"] & stability_table["stability_limit_kh"].notna()]
-    for name, rows in still.groupby("integrator"):
+    for _name, rows in still.groupby("integrator"):
         assert rows["measured_limit_kh"].iloc[0] == pytest.approx(rows["stability_limit_kh"].iloc[0], rel=1e-3)
 
 

@@ -9,7 +9,7 @@ import time
 import numpy as np
 import pytest
 
-from foucault_bench.bench.run.timing import TimingPolicy, time_repeated
+from foucault_bench.bench.run.timing import Timing, TimingPolicy, time_repeated
 
 POLICY = TimingPolicy(min_repeats=3, min_total_s=0.0, max_repeats=3)
 
@@ -20,7 +20,7 @@ def test_cpu_time_leaves_out_waiting_and_wall_time_does_not() -> None:
         return 1
 
     first, last, timing = time_repeated(waits, POLICY)
-    assert first == last == 1 and timing.repeats == 3
+    assert timing is not None and first == last == 1 and timing.repeats == 3
     assert timing.median_s >= 0.02
     assert timing.cpu_median_s < 0.25 * timing.median_s
     assert 0.0 <= timing.cpu_spread_s and 0.0 <= timing.spread_s
@@ -33,14 +33,19 @@ def test_cpu_time_counts_computing() -> None:
         return float(np.sort(data)[0])
 
     _, _, timing = time_repeated(computes, POLICY)
-    assert timing.cpu_median_s > 0.0
+    assert timing is not None and timing.cpu_median_s > 0.0
     # a computing thread's CPU time cannot exceed the wall time it took (one thread; clock granularity aside)
     assert timing.cpu_median_s <= timing.median_s * 1.05 + 1e-3
 
 
 def test_rejected_warm_up_is_not_timed() -> None:
-    calls = []
-    first, last, timing = time_repeated(lambda: calls.append(1) or "failed", POLICY, accept=lambda r: r == "ok")
+    calls: list[int] = []
+
+    def fails() -> str:
+        calls.append(1)
+        return "failed"
+
+    first, last, timing = time_repeated(fails, POLICY, accept=lambda r: r == "ok")
     assert timing is None and len(calls) == 1 and first == last == "failed"
 
 
@@ -72,7 +77,7 @@ class _FakeRun:
         self.calls += 1
         return self.calls
 
-    def timed(self, policy: TimingPolicy):
+    def timed(self, policy: TimingPolicy) -> tuple[int, int, Timing | None]:
         return time_repeated(self, policy, wall_clock=lambda: self.wall_s, cpu_clock=lambda: self.cpu_s)
 
 
@@ -128,5 +133,5 @@ def test_the_quick_matrix_repeats_a_fast_run_and_measures_a_spread() -> None:
                                     (default, 0.01, 20), (default, 0.2, 3), (default, 1.5, 1)):
         run = _FakeRun([cost_s, *[cost_s * (1.0 + 0.01 * index) for index in range(1, 25)]])
         _, _, timing = run.timed(policy)
-        assert timing.repeats == repeats, (policy, cost_s)
+        assert timing is not None and timing.repeats == repeats, (policy, cost_s)
         assert (timing.cpu_spread_s > 0.0) == (repeats > 1)
