@@ -304,6 +304,7 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
         family_representatives,
         midpoint_precession_law,
         structure_preserving_integrators,
+        study_setting_label,
     )
 
     def span(seconds: float) -> str:
@@ -315,11 +316,14 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
         trends = energy_trends(energy)
         horizon = span(float(trends["early_horizon_s"].iloc[0]))
         end = span(float(first["config_duration_s"]))
-        representatives = family_representatives()
-        if sorted(trends["integrator"]) == sorted(representatives.values()):
+        shown = set(zip(trends["integrator"], trends["setting"]))
+        if {"config_kh", "config_tol"} <= set(energy.columns) and shown == {
+                (name, study_setting_label(name, first["config_tol"] if REGISTRY[name].adaptive else first["config_kh"]))
+                for name in family_representatives().values()}:
             which = ("one representative per integrator family, each family's simplest built-in member by the "
                      "facts it declares (fixed-step before adaptive, then the lowest order, then compiled code; "
-                     "reports.studies.family_representatives)")
+                     "reports.studies.family_representatives), the fixed-step ones at "
+                     f"kh = {first['config_kh']:g} and the adaptive ones at tol = {first['config_tol']:g}")
         else:
             which = f"{len(trends)} configured runs"
         clauses = []
@@ -333,15 +337,14 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
                 clauses.append(f"{label} diverged after {run.last_finite_s:g} s, its error having reached "
                                f"{run.max_error:.2g}")
             elif pd.isna(run.exponent):
-                clauses.append(f"{label}: {run.early_max_error:.2g} after {horizon}, {run.max_error:.2g} at "
+                clauses.append(f"{label}: M = {run.early_max_error:.2g} by {horizon}, {run.max_error:.2g} by "
                                f"{end} (too few outputs after {horizon} to fit a trend)")
             else:
-                clauses.append(f"{label} {run.trend}: {run.early_max_error:.2g} after {horizon}, "
-                               f"{run.max_error:.2g} at {end} (p = {round(run.exponent, 2) + 0.0:.2f})")
+                clauses.append(f"{label} {run.trend}: M = {run.early_max_error:.2g} by {horizon}, "
+                               f"{run.max_error:.2g} by {end} (p = {round(run.exponent, 2) + 0.0:.2f})")
         builder.add(Heading("Long-time energy"), Paragraph(
             f"Relative energy error (E − E₀)/E_swing against time over {end}, {which} (study "
-            "`study_long_time_energy`, reports.studies.long_time_energy): fixed-step integrators at "
-            f"kh = {first['config_kh']:g}, adaptive ones at tol = {first['config_tol']:g}. "
+            "`study_long_time_energy`, reports.studies.long_time_energy). "
             f"Values below {charts.LOG_FLOOR:g} (exact zeros included) are drawn at {charts.LOG_FLOOR:g}."),
             Paragraph(
             f"What the runs show, with M(t) the largest |error| up to t and its trend the exponent p of "

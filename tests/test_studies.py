@@ -305,6 +305,7 @@ def test_the_long_time_energy_text_states_what_its_table_shows(tmp_path) -> None
     assert sorted(table["family"].unique()) == sorted(_built_in_families())
     paragraphs = _study_paragraphs({"study_long_time_energy": table}, tmp_path)
     assert "one representative per integrator family" in paragraphs[0]
+    assert "the fixed-step ones at kh = 0.05 and the adaptive ones at tol = 1e-12" in paragraphs[0]
     measured = next(text for text in paragraphs if text.startswith("What the runs show"))
     assert "round-off" not in measured
     horizon_s = ENERGY_TEXT_CONFIG.duration_s / 2
@@ -323,7 +324,7 @@ def test_the_long_time_energy_text_states_what_its_table_shows(tmp_path) -> None
             assert float(match[1]) == pytest.approx(last_s, rel=1e-9) and match[2] == f"{end:.2g}"
             continue
         assert status == "ok"
-        match = re.fullmatch(re.escape(label) + rf" (bounded|drifting|growing): {number} after 600 s, {number} at "
+        match = re.fullmatch(re.escape(label) + rf" (bounded|drifting|growing): M = {number} by 600 s, {number} by "
                              rf"1200 s \(p = {number}\)", claim)
         assert match, claim
         assert match[2] == f"{early:.2g}" and match[3] == f"{end:.2g}"
