@@ -172,7 +172,7 @@ def long_time_energy(config: LongTimeEnergyConfig = LongTimeEnergyConfig(), prog
 
 BOUNDED_BELOW_EXPONENT = 0.25
 """An energy error whose running maximum grows slower than t^0.25 counts as bounded: nearer to a filled band's
-t⁰ than to the t^0.5 of a random walk of round-off errors (Brouwer's law), the slowest drift."""
+t⁰ than to the t^0.5 of a random walk of round-off errors (Brouwer 1937), the slowest drift."""
 GROWING_ABOVE_EXPONENT = 2.0
 """Faster than t² counts as growing (a linear drift is t¹; an exponential growth steepens without bound)."""
 
