@@ -6,15 +6,16 @@ name of its table in the results database) to its function and default config; `
 stored tables and computes the missing ones.
 
 * ``long_time_energy``: relative energy error against time for one representative per integrator family
-  (Euler grows, RK4 drifts, Verlet stays bounded, CVODE/heyoka near round-off).
+  (``family_representatives``); ``energy_trends`` says from the table which errors stay bounded, drift or grow.
 * ``stability_sweep``: long runs and the one-step map's growth against k·h for every fixed-step integrator,
   with and without Earth's rotation: the measured stability limit beside the declared one, and the growth per
   step where rotation destabilises a method (symplectic Euler) beside its theory.
 * ``precession_vs_latitude``: the swing plane's measured rate for many latitudes at once (one heyoka
   ``taylor_adaptive_batch``, one batch element per latitude), against −Ω_E sin φ and its Airy correction.
-* ``precession_vs_release_azimuth``: each structure-preserving integrator's precession error against the
-  direction of release, at a mid-latitude and near the equator (an East release hides what a North-South one
-  shows).
+* ``precession_vs_release_azimuth``: the precession error of each fixed-step integrator declaring a
+  volume-preserving one-step map (``structure_preserving_integrators``) against the direction of release, at a
+  mid-latitude and near the equator (an East release hides what a North-South one shows), at the step each
+  run took; ``midpoint_precession_law`` sets the implicit midpoint rule's error beside its (kh)²/4 law.
 * ``seed_revisited``: the numbers behind the seed note's figures and their corrections (``reports.seed``).
 
 All runs go through the suite's own models and integrator registry; nothing here re-implements an equation of
@@ -25,20 +26,28 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
-from typing import Callable
+from typing import Any, Callable, Protocol, cast
 
 import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
+from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR
 from foucault_bench.bench.problems.scenes import SEED_EARTH_RATE_RAD_S
-from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.schema import setting_label
 from foucault_bench.bench.verdicts.columns import energy_scale, energy_verdicts, released_from_rest
 from foucault_bench.bench.verdicts.stability import measured_stability_limit, spectral_growth, step_matrix
 from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
-from foucault_bench.integrators import STATUS_OK, Problem, Solution, get_integrator
-from foucault_bench.integrators.registry import REGISTRY
+from foucault_bench.integrators import (
+    STATUS_DIVERGED,
+    STATUS_OK,
+    FixedStepIntegrator,
+    Problem,
+    Solution,
+    get_integrator,
+)
+from foucault_bench.integrators.base import COST_COMPILED
+from foucault_bench.integrators.registry import REGISTRY, built_in_names
 from foucault_bench.models import Model, PendulumParameters, get_model
 from foucault_bench.models.analytic import linear_exact, seed_approximate, seed_gap_bound
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S, STANDARD_GRAVITY_M_S2
@@ -88,14 +97,31 @@ def _progress(items: list, description: str, show: bool):
 # --------------------------------------------------------------------------------------------------------------
 # long-time energy
 # --------------------------------------------------------------------------------------------------------------
+def family_representatives() -> dict[str, str]:
+    """One built-in integrator per family present in the registry (family → name), chosen from the facts each
+    declares (``integrators.base.Integrator``), so that a new family appears on its own: a family's simplest
+    member, i.e. fixed-step before adaptive, then the lowest declared order (a variable order counts as the
+    highest), then compiled before Python-driven (``cost_basis``), then the first name; the reference
+    integrator (``bench.problems.reference.REFERENCE_INTEGRATOR``, quad precision, not swept) comes last."""
+    def simplicity(name: str) -> tuple:
+        integrator = REGISTRY[name]
+        order = math.inf if integrator.order is None else integrator.order
+        return (name == REFERENCE_INTEGRATOR, integrator.adaptive, order, integrator.cost_basis != COST_COMPILED, name)
+
+    chosen: dict[str, str] = {}
+    for name in sorted(built_in_names(), key=simplicity):
+        chosen.setdefault(REGISTRY[name].family, name)
+    return dict(sorted(chosen.items()))
+
+
 @dataclass(frozen=True)
 class LongTimeEnergyConfig:
     """One pendulum integrated for a long time by one representative per family.
 
-    ``runs`` pairs an integrator name with its setting (k·h for fixed-step, tolerance for adaptive).
-    Default: the Panthéon (L = 67 m, φ = 48.846°, A = 3 m) on the spherical model for 6 h (1317 swings);
-    CVODE and heyoka at tolerances that keep them near round-off over that span (measured over one sidereal
-    day: CVODE-Adams drifts to 1.7e-4 at tolerance 1e-10 and to 1.7e-7 at 1e-12; heyoka stays at 5e-13).
+    ``runs`` pairs an integrator name with its setting (k·h for fixed-step, tolerance for adaptive); ``None``
+    (the default) runs ``family_representatives()``, the fixed-step ones at k·h = ``kh`` and the adaptive ones
+    at tolerance ``tol``. Default: the Panthéon (L = 67 m, φ = 48.846°, A = 3 m) on the spherical model for
+    6 h (1317 swings).
     """
 
     model: str = "spherical"
@@ -104,19 +130,21 @@ class LongTimeEnergyConfig:
     amplitude_m: float = 3.0
     duration_s: float = 21600.0
     n_out: int = 4001
-    runs: tuple[tuple[str, float], ...] = (
-        ("explicit_euler", 0.05),
-        ("symplectic_euler", 0.05),
-        ("rk4", 0.05),
-        ("verlet", 0.05),
-        ("cvode_adams", 1e-12),
-        ("heyoka_taylor", 1e-15),
-    )
+    kh: float = 0.05
+    tol: float = 1e-12
+    runs: tuple[tuple[str, float], ...] | None = None
+
+    def chosen_runs(self) -> tuple[tuple[str, float], ...]:
+        """``runs``, or one representative per family at ``kh`` or ``tol``."""
+        if self.runs is not None:
+            return self.runs
+        return tuple((name, self.tol if REGISTRY[name].adaptive else self.kh)
+                     for name in family_representatives().values())
 
 
 def long_time_energy(config: LongTimeEnergyConfig = LongTimeEnergyConfig(), progress: bool = True) -> pd.DataFrame:
     """Relative energy error (E − E₀)/E_swing (``relative_energy_error``) on a uniform output grid (t > 0) for
-    each configured run.
+    each run of ``config.chosen_runs()``.
 
     Columns: integrator, family, setting, status, message, t_s, energy_rel_error, plus the config's scalars.
     Rows after a divergence carry NaN errors; a failed run keeps one row per output time, all NaN.
@@ -127,7 +155,7 @@ def long_time_energy(config: LongTimeEnergyConfig = LongTimeEnergyConfig(), prog
     t_out = np.linspace(0.0, config.duration_s, config.n_out)
     problem = Problem(model=model, params=params, t_out=t_out)
     frames = []
-    for name, setting in _progress(list(config.runs), "long-time energy", progress):
+    for name, setting in _progress(list(config.chosen_runs()), "long-time energy", progress):
         solution = solve_with_setting(name, problem, setting)
         frames.append(pd.DataFrame({
             "integrator": name,
@@ -140,6 +168,62 @@ def long_time_energy(config: LongTimeEnergyConfig = LongTimeEnergyConfig(), prog
         }))
     frame = pd.concat(frames, ignore_index=True)
     return _with_config_columns(frame, config, exclude=("runs",))
+
+
+BOUNDED_BELOW_EXPONENT = 0.25
+"""An energy error whose running maximum grows slower than t^0.25 counts as bounded: nearer to a filled band's
+t⁰ than to the t^0.5 of a random walk of round-off errors (Brouwer 1937), the slowest drift."""
+GROWING_ABOVE_EXPONENT = 2.0
+"""Faster than t² counts as growing (a linear drift is t¹; an exponential growth steepens without bound)."""
+
+
+def early_horizon_s(duration_s: float) -> float:
+    """The "first hour" of ``energy_trends``: 1 h, or half the run when it is shorter than 2 h."""
+    return min(3600.0, duration_s / 2.0)
+
+
+def energy_trends(energy: pd.DataFrame) -> pd.DataFrame:
+    """Per run of a ``long_time_energy`` table: how its relative energy error behaves.
+
+    M(t) is the largest |error| up to t. Columns: integrator, family, setting, status; early_horizon_s
+    (``early_horizon_s`` of the run's duration); early_max_error M(early_horizon_s); max_error M at the last
+    finite output (NaN when there is none); last_finite_s that time; exponent p of a least-squares fit
+    log M = p log t + c over the finite outputs from early_horizon_s on (M floored at the double-precision unit
+    round-off; NaN with fewer than two such outputs); trend: ``diverged`` or ``failed`` after the status,
+    else ``bounded`` (p < ``BOUNDED_BELOW_EXPONENT``), ``growing`` (p > ``GROWING_ABOVE_EXPONENT``) or
+    ``drifting``."""
+    rows = []
+    horizon_s = early_horizon_s(float(energy["config_duration_s"].iloc[0]))
+    for (integrator, setting), run in energy.groupby(["integrator", "setting"], sort=False):
+        run = run.sort_values("t_s")
+        error = run["energy_rel_error"].abs().to_numpy(dtype=float)
+        t_s = run["t_s"].to_numpy(dtype=float)
+        finite = np.isfinite(error)
+        running_max = np.maximum.accumulate(np.maximum(error[finite], np.finfo(float).eps))
+        times = t_s[finite]
+        late = times >= horizon_s
+        exponent = (float(np.polyfit(np.log(times[late]), np.log(running_max[late]), 1)[0])
+                    if np.count_nonzero(late) >= 2 else math.nan)
+        status = run["status"].iloc[0]
+        if status != STATUS_OK:
+            trend = "diverged" if status == STATUS_DIVERGED else "failed"
+        elif exponent < BOUNDED_BELOW_EXPONENT:
+            trend = "bounded"
+        elif exponent > GROWING_ABOVE_EXPONENT:
+            trend = "growing"
+        else:
+            trend = "drifting"
+        early = error[finite & (t_s <= horizon_s)]
+        rows.append({
+            "integrator": integrator, "family": run["family"].iloc[0], "setting": setting, "status": status,
+            "early_horizon_s": horizon_s,
+            "early_max_error": float(early.max()) if early.size else math.nan,
+            "max_error": float(error[finite].max()) if finite.any() else math.nan,
+            "last_finite_s": float(times[-1]) if times.size else math.nan,
+            "exponent": exponent,
+            "trend": trend,
+        })
+    return pd.DataFrame(rows)
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -181,7 +265,7 @@ def stability_sweep(config: StabilitySweepConfig = StabilitySweepConfig(), progr
     cases = [(name, rotation) for name in fixed_step for rotation in (False, True)]
     rows = []
     for name, rotation in _progress(cases, "stability sweep", progress):
-        integrator = REGISTRY[name]
+        integrator = cast(FixedStepIntegrator, REGISTRY[name])  # not adaptive: the one-step map's interface
         params = PendulumParameters(length_m=config.length_m, latitude_deg=config.latitude_deg,
                                     amplitude_m=config.amplitude_m,
                                     earth_rate_rad_s=SIDEREAL_EARTH_RATE_RAD_S if rotation else 0.0)
@@ -268,7 +352,7 @@ def precession_vs_latitude(config: PrecessionLatitudeConfig = PrecessionLatitude
     for t_chunk in _progress(list(chunks), "precession vs latitude", progress):
         batch.propagate_until(float(t_chunk))
     rows = []
-    for lat, p, points in zip(latitudes, params, turning):
+    for lat, p, points in zip(latitudes, params, turning, strict=True):
         rate, stderr = precession_rate(np.array(points, dtype=np.float64).reshape(-1, 3))
         rows.append({
             "latitude_deg": float(lat),
@@ -284,11 +368,20 @@ def precession_vs_latitude(config: PrecessionLatitudeConfig = PrecessionLatitude
 # --------------------------------------------------------------------------------------------------------------
 # precession error against the release azimuth
 # --------------------------------------------------------------------------------------------------------------
+def structure_preserving_integrators() -> tuple[str, ...]:
+    """The built-in fixed-step integrators that declare a volume-preserving one-step map (``volume_preserving``
+    in ``Integrator.describe``, implied by ``symplectic``), by name."""
+    return tuple(name for name in built_in_names()
+                 if not REGISTRY[name].adaptive and REGISTRY[name].describe()["volume_preserving"])
+
+
 @dataclass(frozen=True)
 class ReleaseAzimuthConfig:
     """The 3 m pendulum (spherical model, θ₀ = 0.05) released at each azimuth of ``azimuths_deg`` (from South
     towards East) at each latitude of ``latitudes_deg``, for ``duration_s``, sampled every ``output_interval_s``;
-    every integrator of ``integrators`` at k·h = ``kh``, against heyoka at tolerance ``reference_tol``."""
+    every integrator of ``integrators`` (default: ``structure_preserving_integrators()``) at k·h = ``kh`` (the
+    fixed-step loop shortens the step so that whole steps fill each output interval: 0.1 runs as 0.0904),
+    against heyoka at tolerance ``reference_tol``."""
 
     model: str = "spherical"
     length_m: float = 3.0
@@ -298,8 +391,7 @@ class ReleaseAzimuthConfig:
     duration_s: float = 600.0
     output_interval_s: float = 0.45
     kh: float = 0.1
-    integrators: tuple[str, ...] = ("verlet", "yoshida4", "composition6", "implicit_midpoint", "gauss_legendre4",
-                                    "boris", "rk4")
+    integrators: tuple[str, ...] = field(default_factory=structure_preserving_integrators)
     reference_integrator: str = "heyoka_taylor"
     reference_tol: float = 1e-15
 
@@ -320,9 +412,9 @@ def precession_vs_release_azimuth(config: ReleaseAzimuthConfig = ReleaseAzimuthC
     to the horizontal part of ω matters to integrators whose error is not isotropic (Verlet on the sphere: about
     0.09·θ₀ cos φ·Ω_E·(kh)² for a North-South release, ~100× less for an East one).
 
-    Columns: latitude_deg, release_azimuth_deg, integrator, family, kh, rate_rad_s, reference_rate_rad_s,
-    error_earth (|rate − reference rate|/Ω_E, comparable across latitudes), status, message, plus the config's
-    scalars.
+    Columns: latitude_deg, release_azimuth_deg, integrator, family, kh (the k·h the run took), kh_requested
+    (``config.kh``), rate_rad_s, reference_rate_rad_s, error_earth (|rate − reference rate|/Ω_E, comparable
+    across latitudes), status, message, plus the config's other scalars.
     """
     model = get_model(config.model)
     t_out = config.output_interval_s * np.arange(round(config.duration_s / config.output_interval_s) + 1)
@@ -342,14 +434,48 @@ def precession_vs_release_azimuth(config: ReleaseAzimuthConfig = ReleaseAzimuthC
                 "release_azimuth_deg": azimuth,
                 "integrator": name,
                 "family": family_of(name),
-                "kh": config.kh,
+                "kh": (math.nan if solution.step_size_s is None
+                       else solution.step_size_s * params.pendulum_frequency_rad_s),
+                "kh_requested": config.kh,
                 "rate_rad_s": rate,
                 "reference_rate_rad_s": reference_rate,
                 "error_earth": abs(rate - reference_rate) / params.earth_rate_rad_s,
                 "status": solution.status,
                 "message": solution.message,
             })
-    return _with_config_columns(pd.DataFrame(rows), config, exclude=("latitudes_deg", "azimuths_deg", "integrators"))
+    return _with_config_columns(pd.DataFrame(rows), config,
+                                exclude=("latitudes_deg", "azimuths_deg", "integrators", "kh"))
+
+
+MIDPOINT_INTEGRATOR = "implicit_midpoint"
+"""The integrator whose precession error ``midpoint_precession_law`` predicts."""
+
+
+def midpoint_precession_law(azimuth: pd.DataFrame) -> pd.DataFrame:
+    """The implicit midpoint rule's precession error in a ``precession_vs_release_azimuth`` table beside its law.
+
+    The midpoint rule's one-step map on a linear system is the Cayley transform R(z) = (1 + z/2)/(1 − z/2): a
+    mode of frequency ω turns by f(ω)h = 2 arctan(ωh/2) per step. The swing plane turns at the mean of the two
+    circular modes' frequencies −a ± √(k² + a²) (a the local vertical rate), which the scheme maps to
+    ≈ −a f′(k) = −a/(1 + (kh)²/4): slow by (kh)²/4 of the local rate to leading order, whatever the direction
+    of release (integrators/README.md "Why not plain velocity Verlet"). Per latitude (rows with status ok): kh (the step taken), law_error_earth = (kh)²/4 ·
+    |reference rate|/Ω_E (median over the azimuths), measured_error_earth (median of error_earth over the
+    azimuths) and azimuth_variation (max/min − 1 of error_earth over the azimuths). Empty without that
+    integrator's rows."""
+    rows = []
+    runs = azimuth[(azimuth["integrator"] == MIDPOINT_INTEGRATOR) & (azimuth["status"] == STATUS_OK)]
+    for latitude, sweep in runs.groupby("latitude_deg", sort=False):
+        kh = float(sweep["kh"].median())
+        local_rate_earth = float((sweep["reference_rate_rad_s"].abs() / SIDEREAL_EARTH_RATE_RAD_S).median())
+        errors = sweep["error_earth"].to_numpy(dtype=float)
+        rows.append({
+            "latitude_deg": float(latitude), "kh": kh,
+            "law_error_earth": kh * kh / 4.0 * local_rate_earth,
+            "measured_error_earth": float(np.median(errors)),
+            "azimuth_variation": float(errors.max() / errors.min() - 1.0),
+        })
+    return pd.DataFrame(rows, columns=["latitude_deg", "kh", "law_error_earth", "measured_error_earth",
+                                       "azimuth_variation"])
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -516,29 +642,53 @@ def seed_revisited(config: SeedConfig = SeedConfig()) -> SeedStudy:
 # --------------------------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Study:
-    """A study stored as a table named ``name`` in the results database."""
+    """A study stored as a table named ``name`` in the results database. ``version`` counts the changes to what
+    its table holds (a stored table carries it in column ``study_version``; a table without it is version 1):
+    a stored table of another version is recomputed, never shown as if it were the current study's."""
 
     name: str
     compute: Callable[..., pd.DataFrame]
     config: object
+    version: int = 1
 
+
+STUDY_VERSION_COLUMN = "study_version"
 
 STUDIES: dict[str, Study] = {
     study.name: study
     for study in (
-        Study("study_long_time_energy", long_time_energy, LongTimeEnergyConfig()),
+        # version 2: one representative per family from the declared facts, one tolerance for the adaptive ones
+        Study("study_long_time_energy", long_time_energy, LongTimeEnergyConfig(), version=2),
         Study("study_stability", stability_sweep, StabilitySweepConfig()),
         Study("study_precession_latitude", precession_vs_latitude, PrecessionLatitudeConfig()),
-        Study("study_release_azimuth", precession_vs_release_azimuth, ReleaseAzimuthConfig()),
+        # version 2: kh is the step taken (kh_requested the configured one); no rk4
+        Study("study_release_azimuth", precession_vs_release_azimuth, ReleaseAzimuthConfig(), version=2),
     )
 }
 
 
-def ensure_studies(store: ResultsStore | None, recompute: bool = False, configs: dict[str, object] | None = None,
+def stored_version(table: pd.DataFrame) -> int:
+    """The study version a stored table was computed by (1 when it does not say)."""
+    if STUDY_VERSION_COLUMN not in table.columns or table.empty:
+        return 1
+    return int(table[STUDY_VERSION_COLUMN].iloc[0])
+
+
+class TableStore(Protocol):
+    """What ``ensure_studies`` needs of a store: ``bench.run.store.ResultsStore``'s named tables."""
+
+    def read_table(self, name: str) -> pd.DataFrame:
+        """The stored table ``name``; ``KeyError`` when there is none."""
+
+    def write_table(self, name: str, frame: pd.DataFrame) -> None:
+        """Store ``frame`` as table ``name``, replacing it."""
+
+
+def ensure_studies(store: TableStore | None, recompute: bool = False, configs: dict[str, object] | None = None,
                    progress: bool = True) -> dict[str, pd.DataFrame]:
-    """Every study's table: read from ``store`` (``read_table``) or, when missing or ``recompute``, computed
-    with its config (``configs`` overrides the defaults by study name) and written back (``write_table``).
-    ``store`` may be None: everything is computed and nothing is written."""
+    """Every study's table: read from ``store`` (``read_table``) or, when missing, of another ``Study.version``
+    or ``recompute``, computed with its config (``configs`` overrides the defaults by study name) and written
+    back (``write_table``). ``store`` may be None: everything is computed and nothing is written."""
     configs = configs or {}
     tables = {}
     for name, study in STUDIES.items():
@@ -548,15 +698,16 @@ def ensure_studies(store: ResultsStore | None, recompute: bool = False, configs:
                 stored = store.read_table(name)
             except KeyError:
                 stored = None
-        if stored is None or stored.empty:
+        if stored is None or stored.empty or stored_version(stored) != study.version:
             stored = study.compute(configs.get(name, study.config), progress=progress)
+            stored[STUDY_VERSION_COLUMN] = study.version
             if store is not None:
                 store.write_table(name, stored)
         tables[name] = stored
     return tables
 
 
-def _with_config_columns(frame: pd.DataFrame, config: object, exclude: tuple[str, ...]) -> pd.DataFrame:
+def _with_config_columns(frame: pd.DataFrame, config: Any, exclude: tuple[str, ...]) -> pd.DataFrame:
     """Add the config's scalar fields as constant columns (``config_<field>``) so a stored table says how it
     was made."""
     for name, value in asdict(config).items():
@@ -567,6 +718,7 @@ def _with_config_columns(frame: pd.DataFrame, config: object, exclude: tuple[str
 
 __all__ = [
     "LongTimeEnergyConfig", "PrecessionLatitudeConfig", "ReleaseAzimuthConfig", "STUDIES", "SeedConfig", "SeedStudy",
-    "StabilitySweepConfig", "Study", "ensure_studies", "long_time_energy", "precession_vs_latitude",
-    "precession_vs_release_azimuth", "relative_energy_error", "seed_revisited", "solve_with_setting", "stability_sweep",
+    "StabilitySweepConfig", "Study", "energy_trends", "ensure_studies", "family_representatives", "long_time_energy",
+    "midpoint_precession_law", "precession_vs_latitude", "precession_vs_release_azimuth", "relative_energy_error",
+    "seed_revisited", "solve_with_setting", "stability_sweep", "structure_preserving_integrators",
 ]

@@ -7,6 +7,7 @@ every latitude."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pandas as pd
@@ -16,10 +17,13 @@ from foucault_bench.reports.studies import (
     STUDIES,
     LongTimeEnergyConfig,
     PrecessionLatitudeConfig,
+    ReleaseAzimuthConfig,
     StabilitySweepConfig,
     ensure_studies,
+    family_representatives,
     long_time_energy,
     precession_vs_latitude,
+    precession_vs_release_azimuth,
     stability_sweep,
 )
 from foucault_bench.integrators.fixed_step import uniform_output_stride
@@ -132,7 +136,7 @@ def test_measured_limits_match_the_declared_ones_without_rotation(stability_tabl
     Within 1e-3 relative: the implicit schemes' fixed-point solve stops certifying convergence 4e-4 (relative)
     below its limit, where its round-off floor ε/(1 − ρ) rises (``integrators.gauss``)."""
     still = stability_table[~stability_table["rotation"] & stability_table["stability_limit_kh"].notna()]
-    for name, rows in still.groupby("integrator"):
+    for _name, rows in still.groupby("integrator"):
         assert rows["measured_limit_kh"].iloc[0] == pytest.approx(rows["stability_limit_kh"].iloc[0], rel=1e-3)
 
 
@@ -184,6 +188,7 @@ def test_ensure_studies_computes_missing_tables_once_and_reads_them_back() -> No
                                                        runs=(("verlet", 0.2),)),
         "study_stability": StabilitySweepConfig(steps=20, kh=(0.5,)),
         "study_precession_latitude": PrecessionLatitudeConfig(duration_s=120.0, n_latitudes=3),
+        "study_release_azimuth": ReleaseAzimuthConfig(latitudes_deg=(40.44,), azimuths_deg=(0.0,), duration_s=60.0),
     }
     store = _MemoryStore()
     first = ensure_studies(store, configs=small, progress=False)
@@ -196,6 +201,30 @@ def test_ensure_studies_computes_missing_tables_once_and_reads_them_back() -> No
     pd.testing.assert_frame_equal(recomputed["study_stability"], first["study_stability"])  # deterministic
 
 
+def test_a_stored_study_of_another_version_is_recomputed() -> None:
+    """A table stored before the release-azimuth study kept the step taken (no ``study_version`` column: version
+    1) is not shown as the current study: it is recomputed, and the new table says its version."""
+    from foucault_bench.reports.studies import STUDY_VERSION_COLUMN
+
+    small = {
+        "study_long_time_energy": LongTimeEnergyConfig(model="linear", duration_s=60.0, n_out=31,
+                                                       runs=(("verlet", 0.2),)),
+        "study_stability": StabilitySweepConfig(steps=20, kh=(0.5,)),
+        "study_precession_latitude": PrecessionLatitudeConfig(duration_s=120.0, n_latitudes=3),
+        "study_release_azimuth": ReleaseAzimuthConfig(latitudes_deg=(40.44,), azimuths_deg=(0.0,), duration_s=60.0,
+                                                      integrators=("verlet",)),
+    }
+    store = _MemoryStore()
+    current = ensure_studies(store, configs=small, progress=False)
+    old_table = current["study_release_azimuth"].drop(columns=[STUDY_VERSION_COLUMN, "kh_requested"]).assign(kh=0.1)
+    store.tables["study_release_azimuth"] = old_table
+    store.tables["study_stability"] = current["study_stability"].assign(kh=-1.0)  # current version, marked
+    again = ensure_studies(store, configs=small, progress=False)
+    assert (again["study_release_azimuth"][STUDY_VERSION_COLUMN] == STUDIES["study_release_azimuth"].version).all()
+    assert (again["study_release_azimuth"]["kh"] < 0.1).all()
+    assert (again["study_stability"]["kh"] == -1.0).all()  # a table of the current version is read back
+
+
 def test_precession_study_runs_on_a_model_that_reads_fewer_parameters() -> None:
     """The linear model never reads the centrifugal switch, so heyoka takes one parameter fewer than the vector
     holds (``Model.heyoka_parameters``); its swing plane turns at exactly −Ω_E sin φ (the closed form)."""
@@ -203,3 +232,155 @@ def test_precession_study_runs_on_a_model_that_reads_fewer_parameters() -> None:
     table = precession_vs_latitude(config, progress=False)
     tolerance = 3.0 * table["rate_stderr_rad_s"] + 1e-9 * SIDEREAL_EARTH_RATE_RAD_S
     assert np.all(np.abs(table["rate_rad_s"] - table["textbook_rate_rad_s"]) <= tolerance)
+
+
+# --------------------------------------------------------------------------------------------------------------
+# the study texts of the report, recomputed from the study tables
+# --------------------------------------------------------------------------------------------------------------
+def _study_paragraphs(tables: dict[str, pd.DataFrame], tmp_path) -> list[str]:
+    """The paragraphs the report writes for these study tables (``reports.build._studies``)."""
+    from foucault_bench.reports.build import _Builder, _studies
+    from foucault_bench.reports.document import Paragraph
+
+    builder = _Builder(tmp_path, progress=False, interactive=False)
+    _studies(builder, tables)
+    return [block.text for block in builder.blocks if isinstance(block, Paragraph)]
+
+
+def _built_in_families() -> set[str]:
+    return {REGISTRY[name].family for name in built_in_names()}
+
+
+def test_one_and_only_one_representative_per_built_in_family() -> None:
+    representatives = family_representatives()
+    assert set(representatives) == _built_in_families()
+    assert all(REGISTRY[name].family == family for family, name in representatives.items())
+    assert len(set(representatives.values())) == len(representatives)
+    chosen = [name for name, _ in LongTimeEnergyConfig().chosen_runs()]
+    assert sorted(chosen) == sorted(representatives.values())  # the study's default runs are exactly these
+    assert sorted({REGISTRY[name].family for name in chosen}) == sorted(_built_in_families())
+    for name, setting in LongTimeEnergyConfig().chosen_runs():
+        assert setting == (LongTimeEnergyConfig.tol if REGISTRY[name].adaptive else LongTimeEnergyConfig.kh)
+
+
+def test_a_new_built_in_family_gets_its_representative() -> None:
+    """Nothing lists the families: an integrator of a new family in the package's namespace is chosen."""
+    from foucault_bench.integrators import register, unregister
+
+    verlet_class = type(REGISTRY["verlet"])
+    new_class = type("NewFamilyVerlet", (verlet_class,), {"name": "test_new_family_member", "family": "test-family",
+                                                          "__module__": "foucault_bench.integrators.test_new_family"})
+    register(new_class)
+    try:
+        assert family_representatives()["test-family"] == "test_new_family_member"
+        assert family_representatives()["verlet"] == "verlet"
+    finally:
+        unregister("test_new_family_member")
+
+
+ENERGY_TEXT_CONFIG = LongTimeEnergyConfig(model="linear", length_m=10.0, amplitude_m=0.5, duration_s=1200.0, n_out=401)
+
+
+def _recomputed_trend(run: pd.DataFrame, horizon_s: float) -> tuple[float, float, float, float]:
+    """(largest |error| up to horizon_s, up to the end, fitted exponent of the running maximum from horizon_s
+    on, last finite time), from the table's rows."""
+    run = run.sort_values("t_s")
+    finite = run[run["energy_rel_error"].notna()]
+    error = finite["energy_rel_error"].abs().to_numpy()
+    t_s = finite["t_s"].to_numpy()
+    running = np.maximum.accumulate(np.maximum(error, np.finfo(float).eps))
+    late = t_s >= horizon_s
+    design = np.column_stack([np.log(t_s[late]), np.ones(np.count_nonzero(late))])
+    exponent = np.linalg.lstsq(design, np.log(running[late]), rcond=None)[0][0] if late.sum() >= 2 else math.nan
+    return float(error[t_s <= horizon_s].max()), float(error.max()), float(exponent), float(t_s[-1])
+
+
+def test_the_long_time_energy_text_states_what_its_table_shows(tmp_path) -> None:
+    """Every run of the table is named once in the text, with the largest error after the first hour (here half
+    the 1200-s run) and at the end, the fitted exponent and the class it implies, as recomputed here from the
+    table; a diverged run is said to diverge where its finite rows end."""
+    from foucault_bench.reports.studies import BOUNDED_BELOW_EXPONENT, GROWING_ABOVE_EXPONENT
+
+    table = long_time_energy(ENERGY_TEXT_CONFIG, progress=False)
+    assert sorted(table["family"].unique()) == sorted(_built_in_families())
+    paragraphs = _study_paragraphs({"study_long_time_energy": table}, tmp_path)
+    assert "one representative per integrator family" in paragraphs[0]
+    assert "the fixed-step ones at kh = 0.05 and the adaptive ones at tol = 1e-12" in paragraphs[0]
+    measured = next(text for text in paragraphs if text.startswith("What the runs show"))
+    assert "round-off" not in measured
+    horizon_s = ENERGY_TEXT_CONFIG.duration_s / 2
+    claims = measured.split("Per run: ", 1)[1].rstrip(".").split("; ")
+    assert len(claims) == table.groupby(["integrator", "setting"]).ngroups
+    number = r"(-?[0-9.]+(?:e[+-]\d+)?)"
+    for (integrator, setting), run in table.groupby(["integrator", "setting"]):
+        label = f"{integrator} ({run['family'].iloc[0]}, {setting})"
+        [claim] = [claim for claim in claims if claim.startswith(label + " ")]
+        early, end, exponent, last_s = _recomputed_trend(run, horizon_s)
+        status = run["status"].iloc[0]
+        if status == "diverged":
+            match = re.fullmatch(re.escape(label) + rf" diverged after {number} s, its error having reached {number}",
+                                 claim)
+            assert match, claim
+            assert float(match[1]) == pytest.approx(last_s, rel=1e-9) and match[2] == f"{end:.2g}"
+            continue
+        assert status == "ok"
+        match = re.fullmatch(re.escape(label) + rf" (bounded|drifting|growing): M = {number} by 600 s, {number} by "
+                             rf"1200 s \(p = {number}\)", claim)
+        assert match, claim
+        assert match[2] == f"{early:.2g}" and match[3] == f"{end:.2g}"
+        assert float(match[4]) == pytest.approx(exponent, abs=0.0051)
+        expected = ("bounded" if exponent < BOUNDED_BELOW_EXPONENT
+                    else "growing" if exponent > GROWING_ABOVE_EXPONENT else "drifting")
+        assert match[1] == expected, (claim, exponent)
+
+
+AZIMUTH_TEXT_CONFIG = ReleaseAzimuthConfig(latitudes_deg=(40.44, -0.18), azimuths_deg=(0.0, 90.0), duration_s=200.0)
+
+
+@pytest.fixture(scope="module")
+def azimuth_table() -> pd.DataFrame:
+    return precession_vs_release_azimuth(AZIMUTH_TEXT_CONFIG, progress=False)
+
+
+def test_the_release_azimuth_study_holds_the_structure_preserving_integrators_only() -> None:
+    """Chosen from the declared facts: every built-in fixed-step integrator with a volume-preserving one-step
+    map (symplectic ones included), not RK4."""
+    expected = {name for name in built_in_names()
+                if not REGISTRY[name].adaptive and (REGISTRY[name].volume_preserving or REGISTRY[name].symplectic)}
+    assert set(ReleaseAzimuthConfig().integrators) == expected
+    assert "rk4" not in expected and {"verlet", "boris", "implicit_midpoint"} <= expected
+
+
+def test_the_release_azimuth_table_holds_the_step_taken(azimuth_table: pd.DataFrame) -> None:
+    """kh 0.1 on the 0.45-s grid runs as 9 steps of 0.05 s per interval: the table says kh = k·0.05 s."""
+    for latitude, rows in azimuth_table.groupby("latitude_deg"):
+        params = PendulumParameters(length_m=AZIMUTH_TEXT_CONFIG.length_m, latitude_deg=latitude,
+                                    amplitude_m=AZIMUTH_TEXT_CONFIG.amplitude_m)
+        k = params.pendulum_frequency_rad_s
+        grid = AZIMUTH_TEXT_CONFIG.output_interval_s * np.arange(3)
+        _, step_s = uniform_output_stride(grid, AZIMUTH_TEXT_CONFIG.kh / k)
+        assert step_s == pytest.approx(0.05, rel=1e-12)
+        assert np.allclose(rows["kh"], k * step_s, rtol=1e-12, atol=0.0)
+        assert (rows["kh_requested"] == AZIMUTH_TEXT_CONFIG.kh).all()
+
+
+def test_the_release_azimuth_text_states_the_law_at_the_step_taken(azimuth_table: pd.DataFrame, tmp_path) -> None:
+    """The implicit midpoint rule's error predicted in the text, (kh)²/4 of the local rate, is within 2 % of the
+    error measured at each latitude (median over the azimuths, recomputed here from the table), and the text
+    lists exactly the table's integrators and the step they took."""
+    [text] = _study_paragraphs({"study_release_azimuth": azimuth_table}, tmp_path)
+    names = sorted(azimuth_table["integrator"].unique())
+    assert f"`volume_preserving`, implied by `symplectic`: {', '.join(names)})" in text
+    kh_taken = float(azimuth_table["kh"].iloc[0])
+    assert f"at kh = {kh_taken:.4g} ({AZIMUTH_TEXT_CONFIG.kh:g} requested" in text
+    assert f"(kh)²/4 = {kh_taken**2 / 4:.3g}," in text
+    predicted = dict(re.findall(r"([0-9.e+-]+) Ω_E at (-?[0-9.]+)°", text.split("which predicts ")[1].split(";")[0]))
+    predicted = {float(latitude): float(value) for value, latitude in predicted.items()}
+    assert set(predicted) == set(AZIMUTH_TEXT_CONFIG.latitudes_deg)
+    midpoint = azimuth_table[azimuth_table["integrator"] == "implicit_midpoint"]
+    for latitude, rows in midpoint.groupby("latitude_deg"):
+        assert (rows["status"] == "ok").all()
+        measured = rows["error_earth"].median()
+        local_rate_earth = (rows["reference_rate_rad_s"].abs() / SIDEREAL_EARTH_RATE_RAD_S).median()
+        assert predicted[latitude] == pytest.approx(kh_taken**2 / 4 * local_rate_earth, rel=5e-3)  # 3 digits
+        assert predicted[latitude] == pytest.approx(measured, rel=0.02), latitude

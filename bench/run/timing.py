@@ -9,7 +9,8 @@ Timing protocol (``time_repeated``), the same for every integrator (defaults: ``
 
 1. one warm-up call; its result is the one the verdicts are computed from;
 2. timed repeats of the identical call until at least ``min_repeats`` repeats *and* ``min_total_s`` seconds
-   of repeats are done, stopping at ``max_repeats``; when the warm-up call alone took longer than
+   of repeats are done, stopping at ``max_repeats`` (whatever ``min_repeats`` is: with ``min_repeats = 1`` a
+   fast run is still repeated until ``min_total_s`` is spent); when the warm-up call alone took longer than
    ``single_repeat_over_s`` a single timed repeat is made (a run that long is already a stable figure, and
    three repeats of the slowest library runs would take most of the default matrix's budget). Both
    decisions count CPU time (below), so that the number of repeats does not depend on the machine's load;
@@ -90,30 +91,38 @@ class Timing:
 
 
 def time_repeated(call: Callable[[], Result], policy: TimingPolicy,
-                  accept: Callable[[Result], bool] = lambda result: True) -> tuple[Result, Result, Timing | None]:
+                  accept: Callable[[Result], bool] = lambda result: True, *,
+                  wall_clock: Callable[[], float] = time.perf_counter,
+                  cpu_clock: Callable[[], float] = time.thread_time) -> tuple[Result, Result, Timing | None]:
     """Run ``call`` by the protocol of the module docstring.
 
     Returns the warm-up result, the last repeat's result (the warm-up's when no repeat was made) and the
     timing; when ``accept(warm-up result)`` is false (a failed or diverged run) no repeat is made and the
-    timing is ``None``.
+    timing is ``None``. ``wall_clock`` and ``cpu_clock`` are the two clocks (seconds; a test passes fakes).
     """
-    start, cpu_start = time.perf_counter(), time.thread_time()
+    start, cpu_start = wall_clock(), cpu_clock()
     first = call()
-    warm_up_cpu_s = time.thread_time() - cpu_start
-    warm_up_s = time.perf_counter() - start
+    warm_up_cpu_s = cpu_clock() - cpu_start
+    warm_up_s = wall_clock() - start
     if not accept(first):
         return first, first, None
-    wanted = 1 if warm_up_cpu_s > policy.single_repeat_over_s else policy.min_repeats
+    single = warm_up_cpu_s > policy.single_repeat_over_s
     durations: list[float] = []
     cpu_durations: list[float] = []
     last = first
-    while len(durations) < wanted or (
-        wanted > 1 and sum(cpu_durations) < policy.min_total_s and len(durations) < policy.max_repeats
-    ):
-        start, cpu_start = time.perf_counter(), time.thread_time()
+
+    def more_wanted() -> bool:
+        if single:
+            return not durations
+        if len(durations) < policy.min_repeats:
+            return True
+        return sum(cpu_durations) < policy.min_total_s and len(durations) < policy.max_repeats
+
+    while more_wanted():
+        start, cpu_start = wall_clock(), cpu_clock()
         last = call()
-        cpu_durations.append(time.thread_time() - cpu_start)
-        durations.append(time.perf_counter() - start)
+        cpu_durations.append(cpu_clock() - cpu_start)
+        durations.append(wall_clock() - start)
     median = statistics.median(durations)
     return first, last, Timing(
         median_s=median,
