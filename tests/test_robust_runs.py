@@ -7,6 +7,7 @@ return a list as ``nfev`` or a state of the wrong shape, and crash their process
 
 from __future__ import annotations
 
+import importlib
 import hashlib
 import os
 import signal
@@ -426,3 +427,31 @@ def test_more_jobs_than_cores_are_capped_with_a_note(capsys):
     assert jobs(1) == 1
     with pytest.raises(InputError):
         jobs(0)
+
+
+def test_a_run_time_limit_counts_from_the_start_of_the_run_not_of_its_worker(tmp_path, monkeypatch):
+    """A worker's start-up (here: a task module that takes 2 s to import, as heavy imports do on a loaded machine)
+    is not the run's time: a 1 s limit stops a run that takes 60 s, not an instant one behind a slow start."""
+    from foucault_bench.bench.run.executors import LocalExecutor
+
+    module_name = f"slow_to_import_{os.getpid()}"
+    write(tmp_path / f"{module_name}.py", """
+        import time
+        time.sleep(2.0)
+
+        def echo(value):
+            return value
+    """)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    module = importlib.import_module(module_name)  # the parent imports it once; a fresh worker pays the 2 s
+
+    def on_failure(*task, status, reason):
+        return status
+
+    executor = LocalExecutor(jobs=1)
+    try:
+        assert [value for _, value in executor.map_unordered(module.echo, [("answer",)], on_failure, 1.0)] == ["answer"]
+        assert [value for _, value in executor.map_unordered(time.sleep, [(60,)], on_failure, 1.0)] == ["timeout"]
+    finally:
+        executor.kill()
+        sys.modules.pop(module_name, None)

@@ -7,8 +7,10 @@ task that did not give a result: its worker died twice (``WORKER_DIED``) or it p
 
 ``LocalExecutor``: ``jobs`` worker processes (each single-threaded, ``bench.run.timing.limit_threads``), one
 task each at a time, started as soon as the executor is made (their first task, ``warm_up``, imports the
-numerical libraries while the main process validates the matrix). A worker whose task passes its time limit is killed and replaced; a worker that dies is
-replaced and its task retried once in a fresh worker.
+numerical libraries while the main process validates the matrix). A task's time limit counts from its
+worker's start notice (``bench.run.worker.STARTED``), so a replacement worker's start-up is not the run's
+time. A worker whose task passes its time limit is killed and replaced; a worker that dies is replaced and its
+task retried once in a fresh worker.
 
 ``DaskExecutor``: each Dask task runs its work in a worker process of the Dask worker it lands on
 (``run_isolated``; one per Dask worker thread, reused), so a run past its time limit is killed there and the
@@ -36,7 +38,7 @@ import uuid
 from typing import Any, Callable, Iterator
 
 from foucault_bench.bench.errors import InputError, RunInterrupted
-from foucault_bench.bench.run.worker import IDLE_EXIT_S, WorkerProcess, warm_up
+from foucault_bench.bench.run.worker import IDLE_EXIT_S, STARTED, WorkerProcess, warm_up
 from foucault_bench.bench.schema import STATUS_TIMEOUT
 
 WORKER_DIED = "the worker process died during this run (crash in native code or killed, e.g. out of memory)"
@@ -75,7 +77,7 @@ class LocalExecutor:
     def __init__(self, jobs: int):
         self.jobs = jobs
         self.idle: list[WorkerProcess] = []
-        self.busy: dict[WorkerProcess, tuple[tuple, int, float]] = {}
+        self.busy: dict[WorkerProcess, tuple[tuple, int]] = {}
         self.warming: list[WorkerProcess] = []
         for _ in range(jobs):  # start now: each imports the numerical libraries while the matrix is validated
             worker = WorkerProcess()
@@ -109,13 +111,14 @@ class LocalExecutor:
                     worker.kill()
                     waiting.appendleft((task, attempt))
                     continue
-                deadline = float("inf") if timeout_s is None else time.monotonic() + timeout_s
-                self.busy[worker] = (task, attempt, deadline)
-            next_deadline = min(deadline for _, _, deadline in self.busy.values())
+                self.busy[worker] = (task, attempt)
+            next_deadline = min(worker.deadline(timeout_s) for worker in self.busy)
             wait_s = None if next_deadline == float("inf") else max(0.0, next_deadline - time.monotonic())
             for worker in multiprocessing.connection.wait(list(self.busy), timeout=wait_s):
-                task, attempt, _ = self.busy.pop(worker)
-                outcome = worker.receive()
+                outcome = worker.next_message()
+                if outcome is not None and outcome[0] == STARTED:  # its time limit counts from now
+                    continue
+                task, attempt = self.busy.pop(worker)
                 if outcome is None:
                     worker.kill()
                     if attempt < ATTEMPTS:
@@ -126,8 +129,8 @@ class LocalExecutor:
                     self.idle.append(worker)
                 yield task, _outcome_value(task, outcome, on_failure, timeout_s)
             now = time.monotonic()
-            for worker, (task, _, deadline) in list(self.busy.items()):
-                if deadline <= now:
+            for worker, (task, _) in list(self.busy.items()):
+                if worker.deadline(timeout_s) <= now:
                     del self.busy[worker]
                     worker.kill()
                     yield task, _outcome_value(task, ("timeout", None), on_failure, timeout_s)

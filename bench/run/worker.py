@@ -4,6 +4,9 @@ A worker is ``python -m foucault_bench.bench.run.worker PARENT_PID``, a plain su
 ``multiprocessing``: no resource-tracker process, no shared semaphores) that reads pickled tasks
 ``(function, args)`` from its stdin and writes one pickled outcome per task to a private copy of its stdout:
 
+* ``("started", None)`` once it has read the task and imported what unpickling it needs, before calling it:
+  the parent counts a task's time limit from this notice, so a worker's start-up (imports, cache loads, seconds
+  on a loaded machine) never counts as the run's time,
 * ``("ok", value)`` when ``function(*args)`` returned,
 * ``("error", reason)`` when it raised anything, ``BaseException`` included (``SystemExit``,
   ``KeyboardInterrupt`` raised by a plug-in), or when its value could not be pickled.
@@ -43,6 +46,12 @@ PARENT_POLL_S = 0.5
 IDLE_EXIT_S = 60.0
 CLOSE_GRACE_S = 5.0
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
+STARTED = "started"
+"""The kind of the notice a worker sends when it begins a task (see the module docstring)."""
+START_ALLOWANCE_S = 300.0
+"""How long a worker may take from receiving a task to its start notice (importing the task's modules) before
+the task counts as timed out: far above a start-up on a loaded 2-core machine (seconds), so only a stuck worker
+reaches it."""
 
 WORKER_MODULES = (
     "heyoka",  # the reference integrator's library: imported before any timed call, never counted as compile time
@@ -107,6 +116,8 @@ class WorkerProcess:
             subprocess.Popen, command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, bufsize=0,
             close_fds=True).result()
         self.last_used = time.monotonic()
+        self.started_at: float | None = None
+        """When the task sent last began (its start notice), ``None`` until then."""
         self.code_version: str | None = None  # set by whoever checks it (bench.run.executors.run_isolated)
         self._send(list(sys.path))  # the worker imports the same modules (what multiprocessing's spawn does)
 
@@ -126,7 +137,17 @@ class WorkerProcess:
         if not self._send((function, args)):
             return False
         self.last_used = time.monotonic()
+        self.started_at = None
         return True
+
+    def deadline(self, timeout_s: float | None) -> float:
+        """When the task sent last passes its time limit: ``timeout_s`` after its start notice, or, until that
+        notice, ``START_ALLOWANCE_S`` more after it was sent (``inf`` without a limit)."""
+        if timeout_s is None:
+            return float("inf")
+        if self.started_at is None:
+            return self.last_used + START_ALLOWANCE_S + timeout_s
+        return self.started_at + timeout_s
 
     def _send(self, value: Any) -> bool:
         try:
@@ -135,14 +156,24 @@ class WorkerProcess:
             return False
         return True
 
-    def receive(self) -> tuple[str, Any] | None:
-        """The outcome of the task sent last (blocks until it is complete); ``None`` if the worker died."""
+    def next_message(self) -> tuple[str, Any] | None:
+        """The worker's next message (blocks until it is complete): the start notice (``STARTED``, which also
+        sets ``started_at``) or the task's outcome; ``None`` if the worker died."""
         try:
-            outcome = read_message(self.fileno())
+            message = read_message(self.fileno())
         except Exception:  # end-of-file or a truncated message: the worker died mid-task
             return None
         self.last_used = time.monotonic()
-        return outcome
+        if message[0] == STARTED:
+            self.started_at = self.last_used
+        return message
+
+    def receive(self) -> tuple[str, Any] | None:
+        """The outcome of the task sent last (blocks until it is complete, past its start notice); ``None`` if
+        the worker died."""
+        while (message := self.next_message()) is not None and message[0] == STARTED:
+            pass
+        return message
 
     def call(self, function: Callable, args: tuple, timeout_s: float | None,
              stop: Callable[[], bool] = lambda: False) -> tuple[str, Any]:
@@ -151,13 +182,17 @@ class WorkerProcess:
         The worker is killed on a timeout or a stop."""
         if not self.submit(function, args):
             return "died", None
-        deadline = None if timeout_s is None else time.monotonic() + timeout_s
         while True:
-            wait_s = 1.0 if deadline is None else min(1.0, max(0.0, deadline - time.monotonic()))
+            wait_s = min(1.0, max(0.0, self.deadline(timeout_s) - time.monotonic()))
             ready, _, _ = select.select([self.process.stdout], [], [], wait_s)
             if ready:
-                return self.receive() or ("died", None)
-            if deadline is not None and time.monotonic() >= deadline:
+                message = self.next_message()
+                if message is None:
+                    return "died", None
+                if message[0] != STARTED:
+                    return message
+                continue
+            if time.monotonic() >= self.deadline(timeout_s):
                 self.kill()
                 return "timeout", None
             if stop():
@@ -235,6 +270,7 @@ def main(parent_pid: int) -> None:
             function, args = read_message(tasks)
         except EOFError:
             break
+        write_message(outcomes, (STARTED, None))
         try:
             outcome: tuple[str, Any] = ("ok", function(*args))
         except BaseException as error:  # noqa: BLE001 - whatever a task raises is its outcome, never the worker's end
