@@ -535,10 +535,11 @@ STUDIES: dict[str, Study] = {
 
 
 def ensure_studies(store: ResultsStore | None, recompute: bool = False, configs: dict[str, object] | None = None,
-                   progress: bool = True) -> dict[str, pd.DataFrame]:
+                   progress: bool = True, store_computed: bool = True) -> dict[str, pd.DataFrame]:
     """Every study's table: read from ``store`` (``read_table``) or, when missing or ``recompute``, computed
-    with its config (``configs`` overrides the defaults by study name) and written back (``write_table``).
-    ``store`` may be None: everything is computed and nothing is written."""
+    with its config (``configs`` overrides the defaults by study name) and written back (``write_table``) unless
+    ``store_computed`` is false (a read-only database). ``store`` may be None: everything is computed and nothing
+    is written."""
     configs = configs or {}
     tables = {}
     for name, study in STUDIES.items():
@@ -550,7 +551,7 @@ def ensure_studies(store: ResultsStore | None, recompute: bool = False, configs:
                 stored = None
         if stored is None or stored.empty:
             stored = study.compute(configs.get(name, study.config), progress=progress)
-            if store is not None:
+            if store is not None and store_computed:
                 store.write_table(name, stored)
         tables[name] = stored
     return tables
