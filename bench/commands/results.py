@@ -26,6 +26,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    exports = {"--csv": args.csv, "--parquet": args.parquet}
+    distinct_from_inputs(exports, {"--db": args.db}, databases=("--db",))
     if args.parquet:
         require_extra("pyarrow", "parquet", "--parquet")
     import pandas as pd
@@ -34,8 +36,6 @@ def main(args: argparse.Namespace) -> int:
 
     if args.compare and (args.csv or args.parquet or args.all or args.matrix_id):
         raise InputError("--compare takes two matrix ids and no other selection or export option")
-    exports = {"--csv": args.csv, "--parquet": args.parquet}
-    distinct_from_inputs(exports, {"--db": args.db}, databases=("--db",))
     for option, path in exports.items():
         if path:
             output_file(path, option)
