@@ -65,7 +65,16 @@ def replacing_file(path: str | Path, option: str) -> Iterator[Path]:
     """Yield a temporary path beside ``path`` to write the new file to (by name: ``frame.to_csv(temporary)``);
     when the block ends, the file is fsynced and renamed over ``path``. An ``OSError`` inside the block or while
     finishing removes the temporary file and raises ``InputError`` naming ``option``; the old file is unchanged.
-    The new file keeps the old one's permissions (else the umask's)."""
+    The new file keeps the old one's permissions (else the umask's). A ``path`` that exists and is not a regular
+    file (``/dev/stdout``, a named pipe) is written directly: a stream cannot be replaced."""
+    if Path(path).exists() and not Path(path).is_file():  # a stream (/dev/stdout, a pipe): written as it goes
+        try:
+            yield Path(path)
+        except BrokenPipeError:  # the reader went away: bench.cli ends quietly
+            raise
+        except OSError as error:
+            raise _failure(option, Path(path), error, "what was written so far stays") from None
+        return
     target = real_path(path)
     temporary = target.parent / f".{target.name}.{secrets.token_hex(4)}.partial"
     try:
