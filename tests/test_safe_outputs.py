@@ -385,3 +385,40 @@ def test_report_on_a_read_only_database_computes_missing_studies_without_storing
     assert "Traceback" not in done.stderr
     assert "read-only: the study tables study_tiny are computed for this report and not stored" in done.stderr
     assert sha256(database) == before and (tmp_path / "report" / "index.html").is_file()
+
+
+# --- 14. a full disk while a report is built -----------------------------------------------------------------
+def test_a_full_disk_while_building_a_report_keeps_the_old_one(database, tmp_path, monkeypatch, capsys):
+    _quick_sections(monkeypatch)
+    out = tmp_path / "report"
+    assert cli_main(["report", "--db", str(database), "--out", str(out), "--studies", "skip"]) == 0
+    old = folder_digest(out)
+    real_write_text = Path.write_text
+
+    def write_text(self, *args, **kwargs):
+        if any(".building-" in part for part in self.parts):  # the disk fills up while the new report is built
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real_write_text(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "write_text", write_text)
+    capsys.readouterr()
+    assert cli_main(["report", "--db", str(database), "--out", str(out), "--studies", "skip", "--targets", "1e-4"]) == 2
+    lines = error_lines(capsys)
+    assert len(lines) == 1 and "No space left on device" in lines[-1] and "unchanged" in lines[-1], lines
+    assert folder_digest(out) == old and leftovers(tmp_path) == []
+
+
+@pytest.mark.skipif(not CAN_MOUNT, reason="needs root and unshare for a private tmpfs")
+def test_a_real_full_disk_while_building_a_report_keeps_the_old_one(database, tmp_path, monkeypatch, capsys):
+    _quick_sections(monkeypatch)
+    disk = tmp_path / "disk"
+    assert cli_main(["report", "--db", str(database), "--out", str(disk / "report"), "--studies", "skip"]) == 0
+    old = folder_digest(disk / "report")
+    setup, teardown, after = full_disk(disk, 4096)
+    command = quick_report_command("--db", database, "--out", disk / "report", "--studies", "skip")
+    done = in_mount_namespace(setup, command, teardown, env=QUICK_ENVIRONMENT, timeout=300)
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr
+    lines = [line for line in done.stderr.splitlines() if "error:" in line]
+    assert len(lines) == 1 and "No space left on device" in lines[0], done.stderr
+    assert folder_digest(after / "report") == old and leftovers(after) == []
