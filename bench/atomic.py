@@ -1,17 +1,18 @@
 """Writing outputs so that a kill or a full disk never leaves a half-written file or folder, nor loses the old one.
 
-A file (``replacing_file``) is written to a temporary file in its own folder, flushed to disk (fsync) and renamed
-over the target (``os.replace``: atomic on POSIX): a reader sees the old file or the new one, whole. A folder
-(``replacing_folder``: a report, the seed figures) is built in a staging folder beside the target (same file
-system), marked as finished (``MARKER``, written last) and swapped in by two renames: target → backup, staging →
-target, then the backup is removed. Between the two renames (a few microseconds) the target is missing; a process
-killed there leaves the backup and the staging folder whole, and ``recover`` (run before every replacement, and by
-the command's checks) renames the backup back. Leftovers carry the writing process's id (``.NAME.building-PID-…``,
-``.NAME.previous-PID-…``) and are touched only once that process has ended, so concurrent builds never remove
-each other's folders.
+A file (``replacing_file``) is written to a temporary file in its own folder (``.NAME.partial-PID-…``), flushed
+to disk (fsync) and renamed over the target (``os.replace``: atomic on POSIX): a reader sees the old file or the
+new one, whole. A folder (``replacing_folder``: a report, the seed figures) is built in a staging folder beside
+the target (``.NAME.building-PID-…``, on the same file system), marked as finished (``MARKER``, written last) and
+swapped in by two renames: target → backup (``.NAME.previous-PID-…``), staging → target, then the backup is
+removed. Between the two renames (microseconds) the target is missing; a process killed there leaves the backup
+and the staging folder whole, and ``recover`` (run before every replacement, and by the command's checks) renames
+the backup back. Leftovers carry the writing process's id and are removed once that process has ended, never
+before, so concurrent writers never remove each other's files.
 
 A write that fails with ``OSError`` (a full disk, ENOSPC or EDQUOT; a folder made read-only meanwhile) removes
 what it wrote and raises ``InputError`` with one line: exit status 2, no traceback, the old output unchanged.
+The folders' files are not fsynced one by one: a kill loses nothing, a power cut may.
 """
 
 from __future__ import annotations
@@ -32,7 +33,8 @@ MARKER = ".foucault-bench-report"
 """The file a finished report or seed folder holds: JSON saying which command wrote it (``read_marker``). Only a
 folder with it (or an empty one) is replaced without ``--force``."""
 
-_BUILDING, _PREVIOUS = "building", "previous"
+_PARTIAL, _BUILDING, _PREVIOUS = "partial", "building", "previous"
+"""Kinds of temporary entries beside a target: a file being written, a folder being built, the folder replaced."""
 
 
 def real_path(path: str | Path) -> Path:
@@ -76,7 +78,9 @@ def replacing_file(path: str | Path, option: str) -> Iterator[Path]:
             raise _failure(option, Path(path), error, "what was written so far stays") from None
         return
     target = real_path(path)
-    temporary = target.parent / f".{target.name}.{secrets.token_hex(4)}.partial"
+    for leftover in _leftovers(target, _PARTIAL):
+        leftover.unlink(missing_ok=True)
+    temporary = target.parent / _leftover_name(target, _PARTIAL)
     try:
         os.close(os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
         if target.exists():
@@ -123,7 +127,8 @@ def _leftover_name(target: Path, kind: str) -> str:
 
 
 def _leftovers(target: Path, kind: str) -> list[Path]:
-    """Leftover folders of ``kind`` beside ``target`` whose writing process has ended."""
+    """Leftovers of ``kind`` beside ``target`` (files for ``_PARTIAL``, else folders) whose writing process has
+    ended."""
     prefix = f".{target.name}.{kind}-"
     found = []
     try:
@@ -134,7 +139,8 @@ def _leftovers(target: Path, kind: str) -> list[Path]:
         if not entry.name.startswith(prefix):
             continue
         pid_text = entry.name[len(prefix):].split("-", 1)[0]
-        if pid_text.isdigit() and not _process_alive(int(pid_text)) and entry.is_dir() and not entry.is_symlink():
+        right_kind = entry.is_file() if kind == _PARTIAL else entry.is_dir()
+        if pid_text.isdigit() and not _process_alive(int(pid_text)) and right_kind and not entry.is_symlink():
             found.append(entry)
     return sorted(found)
 

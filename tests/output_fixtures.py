@@ -81,8 +81,8 @@ def folder_digest(folder: Path) -> dict[str, str]:
 def leftovers(folder: Path) -> list[str]:
     """Temporary files and folders of the atomic writers in ``folder`` (``bench.atomic``)."""
     return sorted(entry.name for entry in folder.iterdir()
-                  if entry.name.startswith(".") and (".building-" in entry.name or ".previous-" in entry.name
-                                                     or entry.name.endswith(".partial")))
+                  if entry.name.startswith(".") and any(f".{kind}-" in entry.name
+                                                        for kind in ("partial", "building", "previous")))
 
 
 def in_mount_namespace(setup: str, command: list[str], teardown: str = "", **kwargs) -> subprocess.CompletedProcess:

@@ -422,3 +422,14 @@ def test_a_real_full_disk_while_building_a_report_keeps_the_old_one(database, tm
     lines = [line for line in done.stderr.splitlines() if "error:" in line]
     assert len(lines) == 1 and "No space left on device" in lines[0], done.stderr
     assert folder_digest(after / "report") == old and leftovers(after) == []
+
+
+def test_a_temporary_file_of_a_killed_export_goes_with_the_next_write(tmp_path):
+    target = tmp_path / "rows.csv"
+    dead = tmp_path / f".rows.csv.partial-{_dead_pid()}-0000"
+    dead.write_text("half an export", encoding="utf-8")
+    live = tmp_path / ".rows.csv.partial-1-0000"  # pid 1 runs: a write going on
+    live.write_text("being written", encoding="utf-8")
+    write_text_file(target, "whole", "--csv")
+    assert target.read_text(encoding="utf-8") == "whole"
+    assert not dead.exists() and live.exists()

@@ -86,6 +86,13 @@ def distinct_from_inputs(outputs: dict[str, str | Path | None], inputs: dict[str
         raise InputError(problems)
 
 
+def _home() -> Path | None:
+    try:
+        return real_path(Path.home())
+    except (KeyError, RuntimeError):  # no HOME and no password entry: no home folder to protect
+        return None
+
+
 def output_folder(path: str | Path, option: str, *, force: bool, inputs: dict[str, str | Path | None]) -> Path:
     """A folder the command replaces whole (``bench.atomic.replacing_folder``), checked before any work: not a
     file nor under one, in a folder it may write to; if it exists and is not empty, it must hold the marker of an
@@ -97,7 +104,7 @@ def output_folder(path: str | Path, option: str, *, force: bool, inputs: dict[st
     recover(target)  # a build killed while swapping folders left the previous one aside: put it back first
     if target == Path(target.anchor):
         raise InputError(f"{option} {path}: is the root of the file system; give a folder of its own")
-    if target == real_path(Path.home()):
+    if target == _home():
         raise InputError(f"{option} {path}: is the home folder; give a folder of its own")
     if real_path(Path.cwd()).is_relative_to(target):
         raise InputError(f"{option} {path}: holds the current folder; give a folder of its own")
