@@ -433,3 +433,39 @@ def test_a_temporary_file_of_a_killed_export_goes_with_the_next_write(tmp_path):
     write_text_file(target, "whole", "--csv")
     assert target.read_text(encoding="utf-8") == "whole"
     assert not dead.exists() and live.exists()
+
+
+def _sqlite_full_error() -> sqlite3.Error:
+    """A real SQLITE_FULL ("database or disk is full"): a database limited to its present size, made to grow."""
+    connection = sqlite3.connect(":memory:")
+    connection.execute("CREATE TABLE filler (blob BLOB)")
+    connection.execute("PRAGMA max_page_count = 2")
+    try:
+        for _ in range(10):
+            connection.execute("INSERT INTO filler VALUES (zeroblob(4096))")
+    except sqlite3.Error as error:
+        return error
+    finally:
+        connection.close()
+    raise AssertionError("the database did not fill up")
+
+
+def test_a_database_that_fills_up_is_one_line_not_a_traceback(database, tmp_path, monkeypatch, capsys):
+    from foucault_bench.bench.run.store import ResultsStore
+    from foucault_bench.reports.studies import Study
+
+    _quick_sections(monkeypatch)
+    full = _sqlite_full_error()
+
+    def write_table(self, name, frame, **kwargs):
+        raise full
+
+    monkeypatch.setattr(ResultsStore, "write_table", write_table)
+    tiny = {"study_tiny": Study("study_tiny", lambda config, progress: pd.DataFrame({"x": [1.0]}), None)}
+    monkeypatch.setattr("foucault_bench.reports.studies.STUDIES", tiny)  # instead of minutes of real studies
+    monkeypatch.setattr("foucault_bench.reports.build.STUDIES", tiny)
+    before = sha256(database)
+    assert cli_main(["report", "--db", str(database), "--out", str(tmp_path / "report"), "--studies", "stored"]) == 2
+    lines = error_lines(capsys)
+    assert len(lines) == 1 and "the disk is full (database or disk is full)" in lines[0], lines
+    assert sha256(database) == before and not (tmp_path / "report").exists() and leftovers(tmp_path) == []
