@@ -469,3 +469,43 @@ def test_a_database_that_fills_up_is_one_line_not_a_traceback(database, tmp_path
     lines = error_lines(capsys)
     assert len(lines) == 1 and "the disk is full (database or disk is full)" in lines[0], lines
     assert sha256(database) == before and not (tmp_path / "report").exists() and leftovers(tmp_path) == []
+
+
+TINY_MATRIX = """
+name = "tiny_run"
+description = "two short runs: enough to write rows"
+scenes = ["seed_2min"]
+integrators = ["rk4"]
+kh = [0.2, 0.1]
+[timing]
+min_repeats = 1
+min_total_s = 0.01
+max_repeats = 1
+"""
+
+
+@pytest.mark.skipif(not CAN_MOUNT, reason="needs root and unshare for a private tmpfs")
+@pytest.mark.parametrize("free_kb", [0, 40])
+def test_a_run_onto_a_real_full_disk_keeps_the_stored_rows(tmp_path, free_kb):
+    """With nothing left (the database cannot even open its log) and with a little left (SQLite's own
+    SQLITE_FULL on the first insert, measured): one line, exit status 2, the stored matrix run still readable."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    stored = tiny_database(disk / "results.sqlite")
+    matrix = tmp_path / "tiny_run.toml"
+    matrix.write_text(TINY_MATRIX, encoding="utf-8")
+    setup, teardown, after = full_disk(disk, 2048)
+    if free_kb:
+        setup += f"\nrm -f {disk}/filler {disk}/filler2\n" \
+                 f"avail=$(df -k {disk} | tail -1 | awk '{{print $4}}')\n" \
+                 f"dd if=/dev/zero of={disk}/filler bs=1k count=$((avail - {free_kb})) 2>/dev/null"
+    done = in_mount_namespace(setup, cli_command("run", "--matrix", matrix, "--db", disk / "results.sqlite",
+                                                 "--jobs", "1", "--no-progress"), teardown, timeout=300)
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr
+    lines = [line for line in done.stderr.splitlines() if "error:" in line]
+    assert len(lines) == 1 and ("disk is full" if free_kb else "disk I/O error") in lines[0], done.stderr
+    from foucault_bench.bench.run.store import ResultsStore
+
+    with ResultsStore(after / "results.sqlite", create=False) as store:
+        assert len(store.frame(stored)) == 3
