@@ -115,7 +115,11 @@ def output_folder(path: str | Path, option: str, *, force: bool, inputs: dict[st
     parent = target.parent
     if target.is_dir() and not os.access(parent, os.W_OK):
         raise InputError(f"{option} {path}: cannot replace it, the folder {parent} is not writable")
-    if target.is_dir() and not force and read_marker(target) is None and any(target.iterdir()):
+    try:
+        holds_files = target.is_dir() and any(target.iterdir())
+    except OSError as error:
+        raise InputError(f"{option} {path}: cannot read the folder ({error.strerror or error})") from None
+    if holds_files and not force and read_marker(target) is None:
         raise InputError(f"{option} {path}: exists and was not written by foucault-bench report or seed (no "
                          f"{MARKER} file in it); give an empty or new folder, or --force to replace it whole")
     return path
