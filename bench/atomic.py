@@ -209,7 +209,10 @@ def _swap(staging: Path, target: Path) -> None:
     backup = None
     if os.path.lexists(target):
         backup = target.parent / _leftover_name(target, _PREVIOUS)
-        os.rename(target, backup)
+        try:
+            os.rename(target, backup)
+        except FileNotFoundError:  # another run of the command swapping the same folder at this moment
+            backup = None
     try:
         os.rename(staging, target)
     except OSError:
