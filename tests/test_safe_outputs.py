@@ -507,3 +507,26 @@ def test_a_run_onto_a_real_full_disk_keeps_the_stored_rows(tmp_path, free_kb):
 
     with ResultsStore(after / "results.sqlite", create=False) as store:
         assert len(store.frame(stored)) == 3
+
+
+def test_a_full_disk_while_writing_seed_figures_keeps_the_old_folder(tmp_path, monkeypatch, capsys):
+    import foucault_bench.reports.seed as seed
+
+    monkeypatch.setattr(seed, "seed_blocks", lambda folder, prefix: [None])  # the study itself: test_seed.py
+    out = tmp_path / "seed"
+    assert cli_main(["seed", "--out", str(out)]) == 0
+    old = folder_digest(out)
+    assert {MARKER, "index.html", "SEED.md"} <= set(old)
+    real_write_text = Path.write_text
+
+    def write_text(self, *args, **kwargs):
+        if self.name == "SEED.md":  # the disk fills up at the last file
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real_write_text(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "write_text", write_text)
+    capsys.readouterr()
+    assert cli_main(["seed", "--out", str(out)]) == 2
+    lines = error_lines(capsys)
+    assert len(lines) == 1 and "No space left on device" in lines[0]
+    assert folder_digest(out) == old and leftovers(tmp_path) == []
