@@ -3,7 +3,9 @@
 Each command module provides ``add_arguments(parser)`` and ``main(args) -> int`` (``bench.commands``). Bad input
 raises ``bench.errors.InputError``, which is printed as one line per problem with exit status 2 and no traceback.
 A matrix run stopped by its Dask cluster (``bench.errors.RunInterrupted``) exits with 75, SIGINT with 130,
-SIGTERM during a matrix run with 143, and a closed output pipe ends quietly with 141 (128 + SIGPIPE).
+SIGTERM during a matrix run with 143, and a closed output pipe ends quietly with 141 (128 + SIGPIPE). A full disk
+(``bench.errors.is_full_disk``) is one line with exit status 2: outputs are written so that the old ones stay
+whole (``bench.atomic``) and stored rows stay stored.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import signal
 import sys
 
 from foucault_bench.bench.commands import COMMANDS
-from foucault_bench.bench.errors import InputError, RunInterrupted
+from foucault_bench.bench.errors import InputError, RunInterrupted, is_full_disk
 
 
 def _module(name: str):
@@ -44,6 +46,12 @@ def main(argv: list[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())  # Python docs, "Note on SIGPIPE": no second error at exit
         return 128 + signal.SIGPIPE
+    except Exception as error:
+        if not is_full_disk(error):
+            raise
+        print(f"foucault-bench {args.command}: error: the disk is full ({error}): free some space and run it "
+              "again; what was written or stored before is unchanged", file=sys.stderr)
+        return 2
 
 
 def build_parser_for(argv: list[str]) -> argparse.ArgumentParser:

@@ -17,6 +17,19 @@ class RunInterrupted(Exception):
     sysexits.h: a temporary failure, try again)."""
 
     exit_status = 75
+
+
+def is_full_disk(error: BaseException) -> bool:
+    """``error`` says the disk (or the user's quota) is full: ``OSError`` ENOSPC or EDQUOT, or SQLite's
+    SQLITE_FULL ("database or disk is full")."""
+    import errno
+    import sqlite3
+
+    if isinstance(error, OSError):
+        return error.errno in (errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC))
+    return isinstance(error, sqlite3.Error) and getattr(error, "sqlite_errorcode", None) == sqlite3.SQLITE_FULL
+
+
 def require_extra(module: str, extra: str, feature: str) -> None:
     """Raise ``InputError`` naming the package extra that provides ``module`` when it is not installed, e.g.
     ``--scheduler needs the 'dask' extra: pip install 'foucault-bench[dask]'``."""

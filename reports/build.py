@@ -1,6 +1,6 @@
 """``foucault-bench report``: build the report folder (index.html, REPORT.md, figures, tables) from results.
 
-    foucault-bench report [--db PATH] [--matrix-id ID] [--out DIR] [--studies {stored,recompute,skip}]
+    foucault-bench report [--db PATH] [--matrix-id ID] [--out DIR] [--force] [--studies {stored,recompute,skip}]
                           [--targets ERROR ...]
 
 The folder opens in a browser with no server and no network: index.html and REPORT.md hold the same blocks
@@ -19,12 +19,15 @@ small fixture without a database.
 
 from __future__ import annotations
 
+import os
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
 import pandas as pd
+from foucault_bench.bench.atomic import replacing_folder
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.scenes import SCENES
 from foucault_bench.bench.run.store import ResultsStore
@@ -520,21 +523,47 @@ def _provenance(store: ResultsStore, matrix_id: str) -> dict[str, str]:
 def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "stored",
                  targets: tuple[float, ...] = DEFAULT_TARGETS) -> int:
     """``foucault-bench report``: the report of matrix run ``matrix_id`` (``None``: the latest) of database
-    ``db`` written to folder ``out``; ``studies`` is ``stored``, ``recompute`` or ``skip``. Exit status 0."""
+    ``db`` written to folder ``out``; ``studies`` is ``stored``, ``recompute`` or ``skip``. Exit status 0.
+
+    The report is built in a staging folder beside ``out`` and swapped in whole once complete
+    (``bench.atomic.replacing_folder``; the command checks ``out`` first): a kill or a full disk leaves the
+    previous report. Study tables are computed and stored when missing (all of them with ``recompute``); when
+    ``db`` cannot be written they are computed for this report only, with a note saying so."""
     started = time.perf_counter()
     with ResultsStore(db, create=False) as store:
         matrix_id = store.resolve_matrix_id(matrix_id)
         runs = store.frame(matrix_id)
         if runs.empty:
             raise InputError(f"matrix run {matrix_id} in {db} has no stored runs")
-        study_tables = {} if studies == "skip" else ensure_studies(store, recompute=studies == "recompute")
+        study_tables = {} if studies == "skip" else _study_tables(store, db, recompute=studies == "recompute")
         inputs = ReportInputs(runs=runs, studies=study_tables, adequacy=store.adequacy(matrix_id),
                               provenance={"database": str(db), **_provenance(store, matrix_id)},
                               targets=targets)
-    html_path, markdown_path = build_report(inputs, out, progress=True)
-    print(f"report written: {html_path} and {markdown_path} ({len(runs)} runs, "
+    with replacing_folder(out, "--out", "report") as staging:
+        build_report(inputs, staging, progress=True)
+    print(f"report written: {out / 'index.html'} and {out / 'REPORT.md'} ({len(runs)} runs, "
           f"{', '.join(STUDIES) if study_tables else 'no studies'}; {time.perf_counter() - started:.1f} s)")
     return 0
+
+
+def _study_tables(store: ResultsStore, db: Path, recompute: bool) -> dict[str, pd.DataFrame]:
+    """``ensure_studies`` on ``store``, storing what it computes only when the database can be written (the
+    file and its folder, where SQLite keeps its journal); else a note names the tables computed for this report
+    only."""
+    writable = os.access(db, os.W_OK) and os.access(Path(db).resolve().parent, os.W_OK)
+    if not writable:
+        missing = list(STUDIES) if recompute else [name for name in STUDIES if not _stored(store, name)]
+        if missing:
+            print(f"note: {db} is read-only: the study tables {', '.join(missing)} are computed for this report "
+                  "and not stored", file=sys.stderr)
+    return ensure_studies(store, recompute=recompute, store_computed=writable)
+
+
+def _stored(store: ResultsStore, name: str) -> bool:
+    try:
+        return not store.read_table(name).empty
+    except KeyError:
+        return False
 
 
 __all__ = ["ReportInputs", "build_report", "write_report"]

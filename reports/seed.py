@@ -1,6 +1,6 @@
 """``foucault-bench seed``: the seed note's figures reproduced, corrected, and each followed by a finding.
 
-    foucault-bench seed [--out DIR]
+    foucault-bench seed [--out DIR] [--force]
 
 The seed note (Spanish; summarised in reports/README.md "The seed note") shows four figures: the first 2 minutes
 of its approximate analytic solution (eqs. 14-15, ω = 2π/24 h), its Euler solution of eqs. 4-5, that solution's
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure as MplFigure
 
-from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.atomic import replacing_folder
 from foucault_bench.reports.studies import SeedStudy, seed_revisited
 from foucault_bench.reports.charts import integrator_style, save
 from foucault_bench.reports.interactive import drawn_points, from_matplotlib
@@ -257,10 +257,10 @@ def seed_blocks(folder: Path, prefix: str) -> list[Block]:
 
 
 def write_seed(out: Path) -> int:
-    """``foucault-bench seed``: the seed figures and findings written to folder ``out``. Exit status 0."""
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out} exists and is not a folder")
-    blocks = seed_blocks(out, "figures")
-    html_path, markdown_path = write_document(out, "The seed note revisited", blocks[1:], markdown_name="SEED.md")
-    print(f"seed figures and findings written: {html_path} and {markdown_path}")
+    """``foucault-bench seed``: the seed figures and findings written to folder ``out``, built beside it and
+    swapped in whole (``bench.atomic.replacing_folder``; the command checks ``out`` first). Exit status 0."""
+    with replacing_folder(out, "--out", "seed") as staging:
+        blocks = seed_blocks(staging, "figures")
+        write_document(staging, "The seed note revisited", blocks[1:], markdown_name="SEED.md")
+    print(f"seed figures and findings written: {out / 'index.html'} and {out / 'SEED.md'}")
     return 0

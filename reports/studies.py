@@ -685,10 +685,11 @@ class TableStore(Protocol):
 
 
 def ensure_studies(store: TableStore | None, recompute: bool = False, configs: dict[str, object] | None = None,
-                   progress: bool = True) -> dict[str, pd.DataFrame]:
+                   progress: bool = True, store_computed: bool = True) -> dict[str, pd.DataFrame]:
     """Every study's table: read from ``store`` (``read_table``) or, when missing, of another ``Study.version``
     or ``recompute``, computed with its config (``configs`` overrides the defaults by study name) and written
-    back (``write_table``). ``store`` may be None: everything is computed and nothing is written."""
+    back (``write_table``) unless ``store_computed`` is false (a read-only database). ``store`` may be None:
+    everything is computed and nothing is written."""
     configs = configs or {}
     tables = {}
     for name, study in STUDIES.items():
@@ -701,7 +702,7 @@ def ensure_studies(store: TableStore | None, recompute: bool = False, configs: d
         if stored is None or stored.empty or stored_version(stored) != study.version:
             stored = study.compute(configs.get(name, study.config), progress=progress)
             stored[STUDY_VERSION_COLUMN] = study.version
-            if store is not None:
+            if store is not None and store_computed:
                 store.write_table(name, stored)
         tables[name] = stored
     return tables

@@ -42,7 +42,8 @@ def main(args: argparse.Namespace) -> int:
     from foucault_bench.bench.gate.select import validate_against
     from foucault_bench.bench.gate.thresholds import load_thresholds
 
-    from foucault_bench.bench.commands.outputs import creatable, output_file
+    from foucault_bench.bench.atomic import replacing_file
+    from foucault_bench.bench.commands.outputs import creatable, distinct_from_inputs, output_file
 
     # before any work: a bad output path is exit 2, not a gate run lost at the end
     if args.junit:
@@ -54,6 +55,10 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("--matrix-id selects a stored run: give it with --results")
     if args.db and args.results:
         raise InputError("--db is where a fresh matrix run is kept; with --results give the database there")
+    matrix_file = None if args.results else _user_file(args.matrix or thresholds.matrix_to_run())
+    distinct_from_inputs({"--db": args.db, "--junit": args.junit},
+                         {"--thresholds": _user_file(args.thresholds), "--results": args.results, "--matrix": matrix_file},
+                         databases=("--results",))
     if args.results:
         from foucault_bench.bench.run.store import ResultsStore
 
@@ -74,6 +79,14 @@ def main(args: argparse.Namespace) -> int:
     print(f"checking {thresholds.source} against {what}", file=sys.stderr)
     print(render(outcomes, markdown=args.format == "markdown"))
     if args.junit:
-        junit_xml(outcomes, suite=f"{thresholds.source} on {what}").write(args.junit, encoding="utf-8",
-                                                                        xml_declaration=True)
+        with replacing_file(args.junit, "--junit") as temporary:
+            junit_xml(outcomes, suite=f"{thresholds.source} on {what}").write(temporary, encoding="utf-8",
+                                                                            xml_declaration=True)
     return 0 if all(outcome.passed for outcome in outcomes) else 1
+
+
+def _user_file(name: str | None) -> str | None:
+    """``name`` when it is a file (a thresholds or matrix file of the user's), None for a built-in name."""
+    from pathlib import Path
+
+    return name if name is not None and Path(name).is_file() else None

@@ -17,6 +17,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    from foucault_bench.bench.commands.outputs import output_file
     from foucault_bench.bench.perf import run
+
+    if args.markdown:
+        output_file(args.markdown, "--markdown")  # before minutes of measuring
 
     return run(args.only or list(SECTIONS), quick=args.quick, markdown_path=args.markdown)

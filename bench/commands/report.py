@@ -17,7 +17,11 @@ tests/test_cli.py)."""
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--db", type=Path, default=DEFAULT_DB, help=f"results database (default {DEFAULT_DB})")
     parser.add_argument("--matrix-id", default=None, help="matrix run id or unique prefix (default: the latest)")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"report folder (default {DEFAULT_OUT})")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT,
+                        help=f"report folder (default {DEFAULT_OUT}), replaced whole once the new report is "
+                             "complete; an existing folder must be an earlier report or seed folder, or empty")
+    parser.add_argument("--force", action="store_true",
+                        help="replace an existing --out folder that is not an earlier report (its files are lost)")
     parser.add_argument("--studies", choices=("stored", "recompute", "skip"), default="stored",
                         help="study tables: read from the database and compute missing ones (stored, default), "
                              "recompute all, or leave the study sections out (skip)")
@@ -27,14 +31,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from foucault_bench.bench.commands.outputs import creatable
+    from foucault_bench.bench.commands.outputs import output_folder
     from foucault_bench.bench.errors import InputError
 
     problems = [f"--targets: a target error must be a finite number > 0, got {target:g}"
                 for target in args.targets if not (math.isfinite(target) and target > 0)]
     if problems:
         raise InputError(problems)
-    creatable(args.out, "--out", folder=True)
+    output_folder(args.out, "--out", force=args.force, inputs={"--db": args.db})
     from foucault_bench.reports.build import write_report
 
     return write_report(args.db, args.matrix_id, args.out, args.studies, tuple(args.targets))

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from foucault_bench.bench.commands.outputs import output_file
+from foucault_bench.bench.atomic import replacing_file
+from foucault_bench.bench.commands.outputs import distinct_from_inputs, output_file
 from foucault_bench.bench.errors import InputError, require_extra
 from foucault_bench.bench.run.store import DEFAULT_DB
 
@@ -25,6 +26,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    exports = {"--csv": args.csv, "--parquet": args.parquet}
+    distinct_from_inputs(exports, {"--db": args.db}, databases=("--db",))
     if args.parquet:
         require_extra("pyarrow", "parquet", "--parquet")
     import pandas as pd
@@ -33,19 +36,18 @@ def main(args: argparse.Namespace) -> int:
 
     if args.compare and (args.csv or args.parquet or args.all or args.matrix_id):
         raise InputError("--compare takes two matrix ids and no other selection or export option")
-    for option, path in (("--csv", args.csv), ("--parquet", args.parquet)):
+    for option, path in exports.items():
         if path:
             output_file(path, option)
     with ResultsStore(args.db, create=False) as store:
         if args.compare:
             return _compare(store, *args.compare)
         rows = store.frame(args.matrix_id, all_runs=args.all)
-        if args.csv:
-            rows.to_csv(args.csv, index=False)
-            print(f"wrote {len(rows)} rows to {args.csv}", file=sys.stderr)
-        if args.parquet:
-            rows.to_parquet(args.parquet, index=False)
-            print(f"wrote {len(rows)} rows to {args.parquet}", file=sys.stderr)
+        for option, path, write in (("--csv", args.csv, rows.to_csv), ("--parquet", args.parquet, rows.to_parquet)):
+            if path:
+                with replacing_file(path, option) as temporary:
+                    write(temporary, index=False)
+                print(f"wrote {len(rows)} rows to {path}", file=sys.stderr)
         if args.csv or args.parquet:
             return 0
         runs = store.matrix_runs()[["matrix_id", "matrix_name", "status", "started_utc", "finished_utc",

@@ -32,6 +32,7 @@ import sys
 import time
 from pathlib import Path
 
+from foucault_bench.bench.atomic import write_text_file
 from foucault_bench.bench.perf.measure import ROW_HEADERS, Row, machine_description
 
 SECTIONS: dict[str, str] = {
@@ -78,6 +79,6 @@ def run(sections: list[str], *, quick: bool, markdown_path: Path | None) -> int:
     print(", ".join(f"{count} {verdict}" for verdict, count in counts.items()))
     if markdown_path:
         markdown += ["## Targets", "", _table([row.cells() for row in summary], ROW_HEADERS, markdown=True), ""]
-        markdown_path.write_text("\n".join(markdown))
+        write_text_file(markdown_path, "\n".join(markdown), "--markdown")
         print(f"tables written to {markdown_path}", file=sys.stderr)
     return 0

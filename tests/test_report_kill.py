@@ -1,0 +1,164 @@
+"""``kill -9`` of ``foucault-bench report`` at several points leaves the old report or the new one, whole.
+
+The old report is a complete report of the tiny database with ``--targets 1e-3``; each killed run builds the new
+one (``--targets 1e-6``, so that every table differs) into the same folder. The kills come from outside, once
+files of given kinds appear in the staging folder (polled, no fixed sleeps), and from inside at exact points: a
+patch that sends SIGKILL to its own process before REPORT.md is written, between the two renames of the swap, and
+after the swap before the old folder is removed. After each, the folder's files (paths and SHA-256) are the old
+report's or a complete new report's (a run that was not killed; SOURCE_DATE_EPOCH and a fixed SVG salt make the
+bytes repeatable), and the next run leaves no temporary folder behind.
+"""
+
+from __future__ import annotations
+
+import shutil
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+from foucault_bench.bench.atomic import MARKER, recover
+from foucault_bench.bench.cli import main as cli_main
+from output_fixtures import QUICK_ENVIRONMENT, folder_digest, leftovers, quick_report_command, tiny_database
+
+pytestmark = pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="needs POSIX signals")
+
+NEW_TARGETS = ("--targets", "1e-6")
+
+KILL_SELF = """
+import os, signal
+def kill_self():
+    os.kill(os.getpid(), signal.SIGKILL)
+"""
+
+KILL_BEFORE_MARKDOWN = KILL_SELF + """
+import foucault_bench.reports.document as document
+document.render_markdown = lambda *args, **kwargs: kill_self()
+"""
+"""index.html and plotly.min.js are written, REPORT.md is not (the half-written report of the issue)."""
+
+KILL_BETWEEN_RENAMES = KILL_SELF + """
+real_rename = os.rename
+def rename(source, destination):
+    real_rename(source, destination)
+    if ".previous-" in os.fspath(destination):
+        kill_self()
+os.rename = rename
+"""
+"""The old report is renamed aside, the new one not yet in place: the folder is missing."""
+
+KILL_BEFORE_REMOVING_THE_OLD = KILL_SELF + """
+import shutil
+real_rmtree = shutil.rmtree
+def rmtree(path, *args, **kwargs):
+    if ".previous-" in os.fspath(path):
+        kill_self()
+    real_rmtree(path, *args, **kwargs)
+shutil.rmtree = rmtree
+"""
+
+
+@pytest.fixture(scope="module")
+def place(tmp_path_factory):
+    """The tiny database and the old report (a complete report written in this process, without figures)."""
+    import foucault_bench.reports.build as build
+
+    folder = tmp_path_factory.mktemp("kill")
+    database = folder / "results.sqlite"
+    tiny_database(database)
+    old = folder / "old"
+    patch = pytest.MonkeyPatch()
+    patch.setattr(build, "seed_blocks", lambda folder, prefix: [])
+    patch.setattr(build, "_work_precision", lambda builder, runs: None)
+    try:
+        assert cli_main(["report", "--db", str(database), "--out", str(old), "--studies", "skip",
+                         "--targets", "1e-3"]) == 0
+    finally:
+        patch.undo()
+    return {"folder": folder, "database": database, "old": folder_digest(old), "old_folder": old}
+
+
+def old_report_at(place, name: str) -> Path:
+    out = place["folder"] / name / "report"
+    out.parent.mkdir()
+    shutil.copytree(place["old_folder"], out)
+    return out
+
+
+def new_report(place, out: Path, extra: str = "") -> subprocess.CompletedProcess:
+    command = quick_report_command("--db", place["database"], "--out", out, "--studies", "skip", *NEW_TARGETS,
+                                   extra=extra)
+    return subprocess.run(command, capture_output=True, text=True, env=QUICK_ENVIRONMENT, timeout=600)
+
+
+@pytest.fixture(scope="module")
+def killed_in_the_window(place):
+    """A run killed between the two renames, then the next run (which completes): the complete new report."""
+    out = old_report_at(place, "window")
+    done = new_report(place, out, KILL_BETWEEN_RENAMES)
+    state = {"status": done.returncode, "target_existed": out.exists(),
+             "aside": [entry.name for entry in out.parent.iterdir() if ".previous-" in entry.name]}
+    recover(out)
+    state["recovered"] = folder_digest(out)
+    finished = new_report(place, out)
+    assert finished.returncode == 0, finished.stderr
+    state["next_run"] = folder_digest(out)
+    state["leftovers"] = leftovers(out.parent)
+    return state
+
+
+def test_a_kill_between_the_renames_leaves_the_old_report_aside_and_the_next_run_recovers(killed_in_the_window,
+                                                                                           place):
+    state = killed_in_the_window
+    assert state["status"] == -signal.SIGKILL
+    assert not state["target_existed"] and len(state["aside"]) == 1  # the window: the old report is aside, whole
+    assert state["recovered"] == place["old"]
+    assert state["leftovers"] == []
+
+
+def test_the_next_run_writes_a_complete_new_report(killed_in_the_window, place):
+    new = killed_in_the_window["next_run"]
+    assert new != place["old"]
+    assert {MARKER, "index.html", "REPORT.md", "plotly.min.js", "tables/matched_accuracy.csv"} <= set(new)
+    assert any(name.startswith("figures/") and name.endswith(".png") for name in new)
+    assert set(new) == set(place["old"])  # the same files, other contents (the targets differ)
+    assert new["tables/matched_accuracy.csv"] != place["old"]["tables/matched_accuracy.csv"]
+
+
+@pytest.mark.parametrize("extra", [KILL_BEFORE_MARKDOWN, KILL_BEFORE_REMOVING_THE_OLD],
+                         ids=["before REPORT.md", "after the swap"])
+def test_a_kill_at_an_exact_point_leaves_the_old_or_the_new_report(killed_in_the_window, place, extra):
+    name = "markdown" if extra is KILL_BEFORE_MARKDOWN else "swapped"
+    out = old_report_at(place, name)
+    done = new_report(place, out, extra)
+    assert done.returncode == -signal.SIGKILL, done.stderr
+    expected = place["old"] if extra is KILL_BEFORE_MARKDOWN else killed_in_the_window["next_run"]
+    assert folder_digest(out) == expected
+    recover(out)
+    assert folder_digest(out) == expected and leftovers(out.parent) == []
+
+
+def _staging_holds(parent: Path, predicate) -> bool:
+    return any(predicate(staging) for staging in parent.glob(".report.building-*"))
+
+
+@pytest.mark.parametrize("point", ["tables", "figures"])
+def test_a_kill_from_outside_while_building_leaves_the_old_report(killed_in_the_window, place, point):
+    out = old_report_at(place, f"outside-{point}")
+    command = quick_report_command("--db", place["database"], "--out", out, "--studies", "skip", *NEW_TARGETS)
+    predicate = {"tables": lambda staging: len(list((staging / "tables").glob("*"))) >= 8,
+                 "figures": lambda staging: any((staging / "figures").glob("*.png"))}[point]
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=QUICK_ENVIRONMENT)
+    try:
+        while process.poll() is None and not _staging_holds(out.parent, predicate):
+            time.sleep(0.005)
+        process.send_signal(signal.SIGKILL)
+    finally:
+        status = process.wait(timeout=600)
+    assert status == -signal.SIGKILL, "the build ended before the point was reached"
+    assert folder_digest(out) == place["old"]
+    assert len(list(out.parent.glob(".report.building-*"))) == 1  # the killed build's staging folder, ignored
+    recover(out)  # what the next run does first: the killed build's staging folder goes
+    assert folder_digest(out) == place["old"] and leftovers(out.parent) == []
