@@ -22,7 +22,8 @@ import pytest
 
 from foucault_bench.bench.cli import main as cli_main
 from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.run.matrix import MAX_STEPS, load_matrix, parse_matrix
+from foucault_bench.bench.validation import MAX_STEPS
+from foucault_bench.bench.run.matrix import MAX_RUNS, load_matrix, parse_matrix
 from foucault_bench.bench.run.runner import WORKER_DIED, run_matrix
 from foucault_bench.bench.run.store import ResultsStore, compare_runs
 from foucault_bench.integrators import unregister
@@ -240,12 +241,31 @@ def test_plugins_are_imported_only_when_the_rest_is_valid(tmp_path, monkeypatch)
 
 
 def test_validation_of_a_long_sweep_finishes(tmp_path):
-    values = [0.2 * (1.0 - index / 400_000) for index in range(200_000)]
+    values = [0.2 * (1.0 - index / (2 * MAX_RUNS)) for index in range(MAX_RUNS)]
     matrix = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": values})
-    assert len(matrix.runs) == len(values)
+    assert len(matrix.runs) == len(values) == MAX_RUNS
     with pytest.raises(InputError) as caught:
-        parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [*values, values[7], -1.0]})
+        parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [*values[:-2], values[7], -1.0]})
     assert len(caught.value.problems) == 2
+
+
+def test_a_matrix_of_more_than_max_runs_is_refused_before_its_entries_are_read(monkeypatch):
+    """A million distinct kh values (the old code validated them for 14 s and 1 GB, then planned a million
+    runs): one line giving the count, and no entry is looked at (the per-entry check is never called)."""
+    import foucault_bench.bench.run.matrix as matrix_module
+
+    def never(*_):
+        raise AssertionError("an entry was validated")
+
+    monkeypatch.setattr(matrix_module, "setting_problem", never)
+    values = [0.2 * (1.0 - index / 2e6) for index in range(10**6)]
+    (problem,) = refusal({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": values})
+    assert f"expands to {10**6} runs" in problem and str(MAX_RUNS) in problem
+    # the count is scenes × settings summed over the integrators, each with its own sweep or the shared one
+    half = [0.1 * (1.0 - index / 1e6) for index in range(MAX_RUNS // 2 + 1)]
+    (problem,) = refusal({"scenes": ["seed_2min"], "integrators": ["rk4", "verlet", "cvode_bdf"], "kh": [0.1],
+                          "tol": [1e-6], "override": {"rk4": {"kh": half}, "verlet": {"kh": half}}})
+    assert f"expands to {2 * len(half) + 1} runs" in problem
 
 
 # --- read-only commands --------------------------------------------------------------------------------------

@@ -23,6 +23,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "named in the thresholds file)")
     parser.add_argument("--matrix-id", metavar="ID",
                         help="with --results: the stored matrix run to check (id or unique prefix; default: latest)")
+    parser.add_argument("--allow-unfinished", action="store_true",
+                        help="with --results: also check a matrix run that is not finished (status running or "
+                             "interrupted: only some of its rows are stored), with a note; without it such a run "
+                             "is refused (exit 2)")
     parser.add_argument("--db", metavar="FILE",
                         help="when running a matrix: keep its results in this database (default: a temporary one)")
     parser.add_argument("--jobs", type=int, default=None, help="worker processes when running a matrix "
@@ -31,8 +35,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="table format on stdout (markdown for CI job summaries; default: %(default)s)")
     parser.add_argument("--junit", metavar="FILE", help="also write the checks as JUnit XML")
     parser.add_argument("--run-timeout", type=float, default=None, metavar="SECONDS",
-                        help="when running a matrix: per-run time limit (default: the matrix's [timing] "
-                             "run_timeout_s, else 600 s); a run past it is stored with status timeout")
+                        help="when running a matrix: per-run time limit, at most 1e6 s (default: the matrix's "
+                             "[timing] run_timeout_s, else 600 s); a run past it is stored with status timeout")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars while running a matrix")
 
 
@@ -54,13 +58,12 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("--matrix-id selects a stored run: give it with --results")
     if args.db and args.results:
         raise InputError("--db is where a fresh matrix run is kept; with --results give the database there")
+    if args.allow_unfinished and not args.results:
+        raise InputError("--allow-unfinished is for a stored matrix run: give it with --results")
     if args.results:
-        from foucault_bench.bench.run.store import ResultsStore
+        from foucault_bench.bench.gate.check import stored_rows_for_check
 
-        with ResultsStore(args.results, create=False) as store:
-            matrix_id = store.resolve_matrix_id(args.matrix_id)
-            frame = store.frame(matrix_id)
-        what = f"matrix run {matrix_id} in {args.results}"
+        frame, what = stored_rows_for_check(args.results, args.matrix_id, allow_unfinished=args.allow_unfinished)
     else:
         from foucault_bench.bench.gate.check import run_for_check
 

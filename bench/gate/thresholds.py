@@ -5,7 +5,7 @@ A thresholds file (TOML, read with ``tomllib``) is a list of bounds. Each bound 
 
     description = "what this gate protects"
     matrix = "quick"                 # run when check gets neither --results nor --matrix (a built-in name,
-                                     # or a path relative to this file)
+                                     # or a path relative to this file's folder, never to the current one)
 
     [[bound]]
     scene = "pantheon"               # a scene name or a list of names (required)
@@ -126,8 +126,8 @@ class Bound:
 
 @dataclass(frozen=True)
 class Thresholds:
-    """A validated thresholds file. ``matrix`` is the matrix it names (a built-in name or a path; a relative
-    path is resolved against ``directory``, the file's own directory, when a file is there)."""
+    """A validated thresholds file. ``matrix`` is the matrix it names: a built-in matrix name or a path, which
+    is relative to ``directory``, the file's own folder, and to nothing else (never the current folder)."""
 
     description: str
     matrix: str | None
@@ -136,10 +136,19 @@ class Thresholds:
     directory: Path | None = None
 
     def matrix_to_run(self) -> str | None:
-        if self.matrix is None or self.directory is None or Path(self.matrix).is_absolute():
+        """The matrix to load: a file beside the thresholds file (or at an absolute path), else a built-in
+        matrix name; ``InputError`` when the file named is not there."""
+        from foucault_bench.bench.run.matrix import built_in_matrices
+
+        if self.matrix is None or self.directory is None:  # a built-in thresholds file names built-in matrices
             return self.matrix
-        beside = self.directory / self.matrix
-        return str(beside) if beside.is_file() else self.matrix
+        path = self.directory / self.matrix  # an absolute self.matrix stays itself
+        if path.is_file():
+            return str(path)
+        if self.matrix in built_in_matrices():
+            return self.matrix
+        raise InputError(f"{self.source}: matrix = {self.matrix!r}: there is no file {path} (a path in a "
+                         "thresholds file is relative to the file's own folder) and no built-in matrix of that name")
 
 
 
@@ -182,7 +191,7 @@ def parse_thresholds(document: dict[str, Any], *, source: str = "thresholds",
     for number, table in enumerate(tables, start=1):
         where = f"{source}: bound #{number}"
         own: list[str] = []
-        bound = _parse_bound(number, table, lambda message, where=where: own.append(f"{where}: {message}"))
+        bound = _parse_bound(number, table, lambda message, where=where, own=own: own.append(f"{where}: {message}"))
         problems += own
         if not own:
             bounds.append(bound)

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any, Mapping
 import numpy as np
 
 from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.validation import finite_number, is_number, suggestion
+from foucault_bench.bench.validation import finite_number, is_number, short_repr, suggestion
 from foucault_bench.models import MODELS, SIDEREAL_EARTH_RATE_RAD_S, Model, PendulumParameters, get_model
 from foucault_bench.models.parameters import STANDARD_GRAVITY_M_S2
 
@@ -56,7 +56,17 @@ WHOLE_INTERVALS_RTOL = 1e-9
 SEED_EARTH_RATE_RAD_S = 2.0 * math.pi / (24.0 * 3600.0)
 """The seed note's ω = 2π/24 h (its §2): the solar, not the sidereal, day; 0.27 % below Ω_E."""
 
-SCENE_NAME_PATTERN = re.compile(r"^[A-Za-z0-9_.-]+$")
+SCENE_NAME_PATTERN = re.compile(r"[A-Za-z0-9_.-]+")
+"""What a scene name may hold; matched with ``fullmatch`` (``match`` with ``$`` would let a final newline by)."""
+
+MAX_SCENE_NAME_LENGTH = 64
+"""Longest scene name (characters; ASCII by ``SCENE_NAME_PATTERN``, so also bytes). A report names files after
+its scenes through ``reports.build.file_stem``, which writes a character as at most 2 (``A`` → ``-a``): 128
+bytes, leaving 127 of the 255 that a file name may have on Linux (NAME_MAX of ext4, XFS, Btrfs, tmpfs), macOS
+(APFS) and Windows (NTFS) for what the report adds around the stem. The longest such name today,
+``work_precision_<stem>_precession_rate_ref_error.png``, adds 45 bytes (a 173-byte name at this limit), which
+leaves 82 bytes for a longer prefix or suffix or a temporary file's decoration. tests/test_scenes.py builds a
+report for a name of this length in capitals and checks every file name it writes."""
 
 
 @dataclass(frozen=True)
@@ -88,8 +98,10 @@ class Scene:
 
     def __post_init__(self) -> None:
         problems = grid_problems(self.params.small_swing_period_s, self.duration_s, self.output_interval_s)
-        if not SCENE_NAME_PATTERN.match(self.name):
-            problems.insert(0, f"scene name {self.name!r} may hold only letters, digits, '_', '.' and '-'")
+        problems += physical_limit_problems(self.params)
+        name_problem = scene_name_problem(self.name)
+        if name_problem:
+            problems.insert(0, name_problem)
         if self.model not in MODELS:
             problems.insert(0, f"model: unknown model {self.model!r}{suggestion(self.model, MODELS)}; "
                                f"known models: {', '.join(MODELS)}")
@@ -113,6 +125,63 @@ class Scene:
         from foucault_bench.integrators import Problem  # here: reading scenes needs no integrator
 
         return Problem(model=self.model_object, params=self.params, t_out=self.output_grid())
+
+
+def scene_name_problem(name: Any) -> str | None:
+    """Why ``name`` cannot name a scene (characters, length), or ``None``."""
+    if not isinstance(name, str) or not SCENE_NAME_PATTERN.fullmatch(name):
+        return f"scene name {short_repr(name)} may hold only letters, digits, '_', '.' and '-'"
+    if len(name) > MAX_SCENE_NAME_LENGTH:
+        return (f"scene name {short_repr(name)} has {len(name)} characters, more than {MAX_SCENE_NAME_LENGTH}: the "
+                "report's file names, made from it, must fit the 255 bytes a file name may have")
+    return None
+
+
+def physical_limit_problems(params: PendulumParameters) -> list[str]:
+    """What puts a pendulum outside what the models describe (empty list: nothing). Two limits:
+
+    * **Earth's rate below the pendulum's frequency**, Ω < k = √(g/L). The rotating-frame models describe a swing
+      whose plane Earth turns slowly: by π Ω sin φ / k per swing. At Ω ≥ k that is up to half a turn or more per
+      swing, so there is no swing plane whose turning points the precession measurement could follow
+      (``bench.verdicts.turning_points``), and the terms of relative size (Ω/k)² that the planar models drop
+      (models/README.md "The three models") are of order one. Earth's Ω_E/k is 10⁻⁵-10⁻⁴ for real pendulums.
+    * **The bob stays below the pivot's height.** The spherical model's coordinates end there (z = −√(L² − x²
+      − y²), ``models.spherical``), a string can go slack above it, and the planar models approximate the
+      spherical one. The spherical model conserves its Jacobi integral h = ½|ṙ|² + g z − (c/2)|ω×r|² exactly;
+      at z = 0 (the pivot's height) h ≥ −(c/2)|ω|²L², since |ω×r| ≤ |ω| L. So a release with h₀ < −(c/2)|ω|²L²
+      can never reach that height: this is required of every release (from rest it holds unless Ω is near k
+      and the amplitude near L). For a release speed s along a direction û, h₀ = ½ s² q + h₀(s = 0) with
+      q = 1 + ((x₀û_x + y₀û_y)/z₀)² (ż₀ = −(x₀ẋ₀ + y₀ẏ₀)/z₀), which gives the largest speed in the message.
+    """
+    from foucault_bench.models.spherical import energy as jacobi_integral  # (m, x, y, vx, vy, parameters)
+
+    k = params.pendulum_frequency_rad_s
+    omega = params.earth_rate_rad_s
+    if omega >= k:
+        return [f"earth_rate_rad_s = {omega:.6g} rad/s must be below the pendulum's own frequency k = √(g/L) = "
+                f"{k:.6g} rad/s: at Ω ≥ k Earth turns the swing plane by up to half a turn or more per swing, so "
+                "there is no swing plane to follow and the models' neglected (Ω/k)² terms are of order one"]
+    x0, y0, vx, vy = (float(value) for value in params.initial_state())
+    vector = params.parameter_vector()
+    centrifugal = 1.0 if params.centrifugal else 0.0
+    least_at_pivot_height = -0.5 * centrifugal * omega**2 * params.length_m**2
+    at_rest = jacobi_integral(math, x0, y0, 0.0, 0.0, vector) - least_at_pivot_height
+    speed = math.hypot(vx, vy)
+    if speed == 0.0:
+        if at_rest < 0.0:
+            return []
+        return [f"released at amplitude_m = {params.amplitude_m!r} m with earth_rate_rad_s = {omega:.6g} rad/s "
+                f"(k = {k:.6g} rad/s) the bob can rise to the pivot's height even from rest, where the models end "
+                "(lower the amplitude or the rate)"]
+    z0 = -math.sqrt(params.length_m**2 - x0**2 - y0**2)
+    q = 1.0 + ((x0 * vx / speed + y0 * vy / speed) / z0) ** 2
+    largest = math.sqrt(-2.0 * at_rest / q) if at_rest < 0.0 else 0.0
+    if speed < largest:
+        return []
+    return [f"release_velocity_m_s = {short_repr(list(params.release_velocity_m_s))}: a release speed of "
+            f"{speed:.6g} m/s lifts the bob to the pivot's height, where the models end (the spherical model's "
+            f"Jacobi integral would exceed −(c/2)|ω|²L², its least value there); from this release point in this "
+            f"direction the speed must stay below {largest:.6g} m/s"]
 
 
 def grid_problems(period_s: float, duration_s: float, output_interval_s: float) -> list[str]:
@@ -245,8 +314,7 @@ def _field_problems(values: Mapping[str, Any]) -> list[str]:
             continue
         value = values[key]
         if not finite_number(value):
-            shown = repr(value) if len(repr(value)) <= 40 else f"{repr(value)[:20]}…({len(repr(value))} characters)"
-            problems.append(f"{key} must be a finite number ({unit}), got {shown}")
+            problems.append(f"{key} must be a finite number ({unit}), got {short_repr(value)}")
         elif not in_range(value):
             problems.append(f"{key} must be {condition} ({unit}), got {value!r}")
     length, amplitude = values.get("length_m"), values.get("amplitude_m")
