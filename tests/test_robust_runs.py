@@ -437,6 +437,34 @@ def test_bad_output_paths_and_options_are_refused_before_any_work(tmp_path, caps
     assert sorted(path.name for path in tmp_path.iterdir()) == ["a_file"]  # nothing created
 
 
+def test_a_run_timeout_the_executors_cannot_wait_is_refused_before_anything_is_opened(tmp_path, capsys):
+    """--run-timeout 3e6 s passed validation, opened the matrix run and then raised OverflowError in the local
+    executor's wait (poll(2) takes a C int of milliseconds), leaving the run "interrupted". Now: exit 2, one
+    line, no database; and the documented maximum is one the wait accepts, a little more than the overflow
+    point is not."""
+    import multiprocessing
+    import multiprocessing.connection
+
+    from foucault_bench.bench.validation import MAX_RUN_TIMEOUT_S
+
+    matrix = write(tmp_path / "tiny.toml", 'scenes = ["seed_2min"]\nintegrators = ["rk4"]\nkh = [0.2]\n')
+    database = tmp_path / "results.sqlite"
+    for flag, value in (("--run-timeout", "3e6"), ("--run-timeout", str(MAX_RUN_TIMEOUT_S * 1.5))):
+        assert cli_main(["run", "--matrix", str(matrix), "--db", str(database), flag, value, "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+        assert f"--run-timeout = {float(value):g} s is more than 1e+06 s" in err
+        assert not database.exists()
+    (problem,) = refusal({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [0.2],
+                          "timing": {"run_timeout_s": 3e6}})
+    assert "timing: run_timeout_s = 3e+06 s is more than 1e+06 s" in problem
+    ready, other_end = multiprocessing.Pipe()
+    other_end.send(b"x")  # so that the wait returns at once
+    assert multiprocessing.connection.wait([ready], timeout=MAX_RUN_TIMEOUT_S) == [ready]
+    with pytest.raises(OverflowError):
+        multiprocessing.connection.wait([ready], timeout=(2**31 + 1000) / 1000)
+
+
 def test_more_jobs_than_cores_are_capped_with_a_note(capsys):
     from foucault_bench.bench.commands.options import jobs
     from foucault_bench.bench.run.provenance import available_cores
