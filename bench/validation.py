@@ -4,6 +4,8 @@ Every reader of user input collects *all* problems as one-line messages and rais
 ``bench.errors.InputError`` (exit status 2, no traceback). This module holds what those readers share:
 
 * ``suggestion``: the " (did you mean 'x'?)" hint for a misspelt name (``difflib.get_close_matches``);
+* ``short_repr`` / ``short_list``: a value or a list shown in a message, cut so that the message stays one short
+  line whatever the input holds;
 * ``is_number`` / ``finite_number``: a real number (not a bool), and one that is finite (optionally > 0);
 * ``built_in_names`` / ``read_toml``: the package's built-in TOML files (``bench/matrices``,
   ``bench/thresholds``, found with ``importlib.resources`` so that they work from a wheel as from a checkout)
@@ -104,11 +106,18 @@ def read_toml(name_or_path: str | Path, *, folder: str, kind: str) -> tuple[dict
     return document, source, directory
 
 
-def short_repr(value: Any, limit: int = 40) -> str:
-    """``repr(value)``, cut to its first 20 characters and its length when longer than ``limit`` (a message
-    stays one short line even for a value of a million characters)."""
+def short_repr(value: Any, limit: int = 80) -> str:
+    """``repr(value)``, cut to its first 60 characters and its length when longer than ``limit`` (a message
+    stays one short line even for a value of a million characters; ``repr`` escapes newlines)."""
     text = repr(value)
-    return text if len(text) <= limit else f"{text[:20]}…({len(text)} characters)"
+    return text if len(text) <= limit else f"{text[:60]}…({len(text)} characters)"
+
+
+def short_list(items: Iterable[str], limit: int = 10) -> str:
+    """The items joined by commas, the first ``limit`` of them and how many there are in all when more."""
+    items = list(items)
+    shown = ", ".join(items[:limit])
+    return shown if len(items) <= limit else f"{shown}, … ({len(items)} in all)"
 
 
 def setting_problem(key: str, value: Any) -> str | None:
@@ -136,7 +145,7 @@ def coarse_steps_problem(kh_values: Iterable[float], frequency_rad_s: float, out
     too_coarse = [value for value in kh_values if value > largest * (1.0 + STEP_FIT_RTOL)]
     if not too_coarse:
         return None
-    return (f"kh = {', '.join(f'{value:g}' for value in too_coarse)} exceeds what {what} allows: a step is at "
+    return (f"kh = {short_list(f'{value:g}' for value in too_coarse)} exceeds what {what} allows: a step is at "
             f"most one output interval, kh <= k·Δ = {largest:.4g}")
 
 

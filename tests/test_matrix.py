@@ -174,7 +174,7 @@ def test_azimuth_variants_have_distinct_names_that_read_back_as_their_azimuths()
     names = [scene.name for scene in matrix.scenes]
     assert len(set(names)) == len(azimuths)
     assert names[:2] == ["seed_2min-az45", "seed_2min-az45.0000001"]
-    for scene, azimuth in zip(matrix.scenes, azimuths):
+    for scene, azimuth in zip(matrix.scenes, azimuths, strict=True):
         assert float(scene.name.removeprefix("seed_2min-az")) == azimuth == scene.params.release_azimuth_deg
 
 

@@ -103,7 +103,7 @@ class Scene:
         if name_problem:
             problems.insert(0, name_problem)
         if self.model not in MODELS:
-            problems.insert(0, f"model: unknown model {self.model!r}{suggestion(self.model, MODELS)}; "
+            problems.insert(0, f"model: unknown model {short_repr(self.model)}{suggestion(self.model, MODELS)}; "
                                f"known models: {', '.join(MODELS)}")
         if problems:
             raise InputError(problems)
@@ -170,7 +170,7 @@ def physical_limit_problems(params: PendulumParameters) -> list[str]:
     if speed == 0.0:
         if at_rest < 0.0:
             return []
-        return [f"released at amplitude_m = {params.amplitude_m!r} m with earth_rate_rad_s = {omega:.6g} rad/s "
+        return [f"released at amplitude_m = {short_repr(params.amplitude_m)} m with earth_rate_rad_s = {omega:.6g} rad/s "
                 f"(k = {k:.6g} rad/s) the bob can rise to the pivot's height even from rest, where the models end "
                 "(lower the amplitude or the rate)"]
     z0 = -math.sqrt(params.length_m**2 - x0**2 - y0**2)
@@ -189,9 +189,9 @@ def grid_problems(period_s: float, duration_s: float, output_interval_s: float) 
     (empty list: nothing)."""
     problems: list[str] = []
     if not (finite_number(duration_s, positive=True)):
-        problems.append(f"duration_s must be a number of seconds > 0, got {duration_s!r}")
+        problems.append(f"duration_s must be a number of seconds > 0, got {short_repr(duration_s)}")
     if not (finite_number(output_interval_s, positive=True)):
-        problems.append(f"output_interval_s must be a number of seconds > 0, got {output_interval_s!r}")
+        problems.append(f"output_interval_s must be a number of seconds > 0, got {short_repr(output_interval_s)}")
     if problems:
         return problems
     period = period_s
@@ -246,10 +246,10 @@ def scene_from_mapping(name: str, mapping: Mapping[str, Any]) -> Scene:
     """
     problems: list[str] = []
     if not isinstance(mapping, Mapping):
-        raise InputError([f"a scene must be a table of fields, got {mapping!r}"])
+        raise InputError([f"a scene must be a table of fields, got {short_repr(mapping)}"])
     for key in mapping:
         if key not in SCENE_KEYS:
-            problems.append(f"unknown key {key!r}{suggestion(str(key), SCENE_KEYS)}; "
+            problems.append(f"unknown key {short_repr(key)}{suggestion(str(key), SCENE_KEYS)}; "
                             f"known keys: {', '.join(SCENE_KEYS)}")
     values: dict[str, Any] = {}
     base_name = mapping.get("base")
@@ -263,7 +263,7 @@ def scene_from_mapping(name: str, mapping: Mapping[str, Any]) -> Scene:
                                     f"for the changed fields): {base.why_model}",
                           assumptions=base.assumptions)
         else:
-            problems.append(f"base: unknown scene {base_name!r}{suggestion(str(base_name), SCENES)}; "
+            problems.append(f"base: unknown scene {short_repr(base_name)}{suggestion(str(base_name), SCENES)}; "
                             f"built-in scenes: {', '.join(SCENES)}")
     values.update({key: value for key, value in mapping.items() if key in SCENE_KEYS and key != "base"})
     if base_name is None:
@@ -316,25 +316,25 @@ def _field_problems(values: Mapping[str, Any]) -> list[str]:
         if not finite_number(value):
             problems.append(f"{key} must be a finite number ({unit}), got {short_repr(value)}")
         elif not in_range(value):
-            problems.append(f"{key} must be {condition} ({unit}), got {value!r}")
+            problems.append(f"{key} must be {condition} ({unit}), got {short_repr(value)}")
     length, amplitude = values.get("length_m"), values.get("amplitude_m")
     if is_number(length) and is_number(amplitude) and length > 0 and amplitude >= length:
-        problems.append(f"amplitude_m = {amplitude!r} m must be less than length_m = {length!r} m "
+        problems.append(f"amplitude_m = {short_repr(amplitude)} m must be less than length_m = {short_repr(length)} m "
                         "(the release point lies on the sphere of radius L, below the pivot)")
     velocity = values.get("release_velocity_m_s")
     if velocity is not None and not (
         isinstance(velocity, (list, tuple)) and len(velocity) == 2
         and all(finite_number(v) for v in velocity)
     ):
-        problems.append(f"release_velocity_m_s must be a pair [vx, vy] of finite numbers (m/s), got {velocity!r}")
+        problems.append(f"release_velocity_m_s must be a pair [vx, vy] of finite numbers (m/s), got {short_repr(velocity)}")
     if "centrifugal" in values and not isinstance(values["centrifugal"], bool):
-        problems.append(f"centrifugal must be true or false, got {values['centrifugal']!r}")
+        problems.append(f"centrifugal must be true or false, got {short_repr(values['centrifugal'])}")
     if "model" in values and values["model"] not in MODELS:
-        problems.append(f"model: unknown model {values['model']!r}{suggestion(str(values['model']), MODELS)}; "
+        problems.append(f"model: unknown model {short_repr(values['model'])}{suggestion(str(values['model']), MODELS)}; "
                         f"known models: {', '.join(MODELS)}")
     for key in TEXT_KEYS:
         if key in values and not isinstance(values[key], str):
-            problems.append(f"{key} must be a string, got {values[key]!r}")
+            problems.append(f"{key} must be a string, got {short_repr(values[key])}")
     length, gravity = values.get("length_m"), values.get("gravity_m_s2", STANDARD_GRAVITY_M_S2)
     grid_keys_ok = not any(message.startswith(("duration_s", "output_interval_s", "length_m", "gravity_m_s2"))
                            for message in problems)

@@ -54,13 +54,13 @@ from typing import Any
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR, physics_identity
-from foucault_bench.bench.problems.scenes import SCENES, Scene, scene_from_mapping
+from foucault_bench.bench.problems.scenes import SCENES, Scene, scene_from_mapping, scene_name_problem
 from foucault_bench.bench.run.provenance import code_version, digest
 from foucault_bench.bench.run.timing import TimingPolicy
 from foucault_bench.bench.schema import declared_facts, setting_label
 from foucault_bench.bench.validation import (
-    built_in_names, coarse_steps_problem, is_number, read_toml, run_timeout_problem, setting_problem, short_repr,
-    step_count_problem, suggestion,
+    built_in_names, coarse_steps_problem, is_number, read_toml, run_timeout_problem, setting_problem, short_list,
+    short_repr, step_count_problem, suggestion,
 )
 
 TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "release_azimuth_deg", "integrators", "kh", "tol",
@@ -166,13 +166,13 @@ def _plugin_problems(plugins: list[str]) -> list[str]:
         try:
             importlib.import_module(module_name)
         except BaseException as error:  # noqa: BLE001 - a plug-in's failure (even sys.exit) is a problem to report
-            problems.append(f"plugins: cannot import {module_name!r}: {type(error).__name__}: {error}")
+            problems.append(f"plugins: cannot import {short_repr(module_name)}: {type(error).__name__}: {error}")
             continue
         own = [name for name, integrator in REGISTRY.items()
                if getattr(integrator, "__module__", "") == module_name
                or getattr(integrator, "__module__", "").startswith(f"{module_name}.")]
         if not own:
-            problems.append(f"plugins: {module_name!r} registers no integrator (a plug-in module must "
+            problems.append(f"plugins: {short_repr(module_name)} registers no integrator (a plug-in module must "
                             "register at least one with integrators.register)")
     return problems
 
@@ -202,14 +202,14 @@ def _validate(document: dict[str, Any], source: str, default_name: str, known_la
 
     for key in document:
         if key not in TOP_LEVEL_KEYS:
-            problem(f"unknown key {key!r}{suggestion(key, TOP_LEVEL_KEYS)}; allowed keys: {', '.join(TOP_LEVEL_KEYS)}")
+            problem(f"unknown key {short_repr(key)}{suggestion(key, TOP_LEVEL_KEYS)}; allowed keys: {', '.join(TOP_LEVEL_KEYS)}")
 
     name = document.get("name", default_name)
     if not isinstance(name, str) or not name:
-        problem(f"name must be a non-empty string, got {name!r}")
+        problem(f"name must be a non-empty string, got {short_repr(name)}")
     description = document.get("description", "")
     if not isinstance(description, str):
-        problem(f"description must be a string, got {description!r}")
+        problem(f"description must be a string, got {short_repr(description)}")
 
     plugins = _string_list(document, "plugins", problem, required=False)
     scenes = _release_azimuth_variants(_scenes(document, problem), document.get("release_azimuth_deg"), problem)
@@ -239,11 +239,11 @@ def _string_list(document: dict[str, Any], key: str, problem, *, required: bool)
         return []
     value = document[key]
     if not isinstance(value, list) or not all(isinstance(item, str) for item in value):
-        problem(f"{key} must be a list of strings, got {value!r}")
+        problem(f"{key} must be a list of strings, got {short_repr(value)}")
         return []
     duplicates = sorted(item for item, count in Counter(value).items() if count > 1)
     if duplicates:
-        problem(f"{key}: listed more than once: {', '.join(duplicates)}")
+        problem(f"{key}: listed more than once: {short_list(short_repr(item) for item in duplicates)}")
     return list(dict.fromkeys(value))
 
 
@@ -253,23 +253,24 @@ def _scenes(document: dict[str, Any], problem) -> list[Scene]:
         if name in SCENES:
             scenes.append(SCENES[name])
         else:
-            problem(f"scenes: unknown scene {name!r}{suggestion(name, SCENES)}; built-in scenes: {', '.join(SCENES)}")
+            problem(f"scenes: unknown scene {short_repr(name)}{suggestion(name, SCENES)}; built-in scenes: {', '.join(SCENES)}")
     inline = document.get("scene", {})
     if not isinstance(inline, dict):
-        problem(f"scene must be a table of inline scenes ([scene.NAME]), got {inline!r}")
+        problem(f"scene must be a table of inline scenes ([scene.NAME]), got {short_repr(inline)}")
         inline = {}
     for name, mapping in inline.items():
+        where = f"scene.{name}" if scene_name_problem(name) is None else f"scene.{short_repr(name)}"  # one line
         if name in SCENES:
-            problem(f"scene.{name}: the name {name!r} is taken by a built-in scene; choose another name")
+            problem(f"{where}: the name {short_repr(name)} is taken by a built-in scene; choose another name")
             continue
         if not isinstance(mapping, dict):
-            problem(f"scene.{name} must be a table of scene fields, got {mapping!r}")
+            problem(f"{where} must be a table of scene fields, got {short_repr(mapping)}")
             continue
         try:
             scenes.append(scene_from_mapping(name, mapping))
         except InputError as error:
             for message in error.problems:
-                problem(f"scene.{name}: {message}")
+                problem(f"{where}: {message}")
     if not document.get("scenes") and not inline:
         problem("no scenes: list built-in ones in scenes = [...] or define [scene.NAME] tables")
     return scenes
@@ -295,6 +296,7 @@ def _release_azimuth_variants(scenes: list[Scene], azimuths: Any, problem) -> li
         return scenes
     if len(set(azimuths)) != len(azimuths):
         problem("release_azimuth_deg: an azimuth is listed more than once")
+        azimuths = list(dict.fromkeys(azimuths))  # one variant each: no second problem for the same name
     if len(scenes) * len(azimuths) > MAX_RUNS:
         problem(f"release_azimuth_deg: {len(scenes)} scene(s) × {len(azimuths)} azimuths make more than the "
                 f"{MAX_RUNS} runs a matrix may have")
@@ -312,7 +314,7 @@ def _release_azimuth_variants(scenes: list[Scene], azimuths: Any, problem) -> li
                 ))
             except InputError as error:
                 for message in error.problems:
-                    problem(f"release_azimuth_deg = {label} of scene {scene.name!r}: {message}")
+                    problem(f"release_azimuth_deg = {label} of scene {short_repr(scene.name)}: {message}")
     return variants
 
 
@@ -320,20 +322,20 @@ def _check_unique_names(scenes: list[Scene], problem) -> None:
     """Every scene of a matrix has its own name: rows, references and report files are keyed by it."""
     for name, count in Counter(scene.name for scene in scenes).items():
         if count > 1:
-            problem(f"{count} scenes are named {name!r} (rows and report files are keyed by the scene name): "
+            problem(f"{count} scenes are named {short_repr(name)} (rows and report files are keyed by the scene name): "
                     "rename the inline scene or change the azimuth")
 
 
 def _timing(table: Any, problem) -> tuple[TimingPolicy, float]:
     if not isinstance(table, dict):
-        problem(f"timing must be a table, got {table!r}")
+        problem(f"timing must be a table, got {short_repr(table)}")
         return TimingPolicy(), DEFAULT_RUN_TIMEOUT_S
     values: dict[str, Any] = {}
     defaults = TimingPolicy()
     run_timeout_s = DEFAULT_RUN_TIMEOUT_S
     for key, value in table.items():
         if key not in TIMING_KEYS:
-            problem(f"timing: unknown key {key!r}{suggestion(key, TIMING_KEYS)}; allowed keys: {', '.join(TIMING_KEYS)}")
+            problem(f"timing: unknown key {short_repr(key)}{suggestion(key, TIMING_KEYS)}; allowed keys: {', '.join(TIMING_KEYS)}")
             continue
         if key == RUN_TIMEOUT_KEY:
             message = run_timeout_problem(value, f"timing: {key}")
@@ -347,7 +349,7 @@ def _timing(table: Any, problem) -> tuple[TimingPolicy, float]:
             problem(f"timing: {key} must be {'an integer' if wanted is int else 'a number'}, got {short_repr(value)}")
             continue
         if wanted is float and not math.isfinite(value):
-            problem(f"timing: {key} must be finite, got {value!r}")
+            problem(f"timing: {key} must be finite, got {short_repr(value)}")
             continue
         values[key] = wanted(value)
     policy = TimingPolicy(**values)
@@ -376,7 +378,7 @@ def _sweep(value: Any, key: str, where: str, problem) -> list[float]:
     unique = list(dict.fromkeys(accepted))
     if len(unique) < len(accepted):
         duplicates = sorted(item for item, count in Counter(accepted).items() if count > 1)
-        problem(f"{where}: {key} lists {', '.join(f'{item:g}' for item in duplicates)} more than once")
+        problem(f"{where}: {key} lists {short_list(f'{item:g}' for item in duplicates)} more than once")
     return unique
 
 
@@ -394,7 +396,7 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
         elif name not in REGISTRY and known_later:
             continue
         elif name not in REGISTRY:
-            problem(f"integrators: unknown integrator {name!r}{suggestion(name, REGISTRY)}; "
+            problem(f"integrators: unknown integrator {short_repr(name)}{suggestion(name, REGISTRY)}; "
                     f"known integrators: {', '.join(sorted(set(REGISTRY) - {REFERENCE_INTEGRATOR}))}")
         else:
             integrators.append(REGISTRY[name])
@@ -413,14 +415,14 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
     for name, table in overrides.items():
         where = f"override.{name}"
         if name not in names:
-            problem(f"{where}: {name!r} is not listed in integrators{suggestion(name, names)}")
+            problem(f"{where}: {short_repr(name)} is not listed in integrators{suggestion(name, names)}")
             continue
         if not isinstance(table, dict):
             problem(f"{where} must be a table with kh or tol, got {short_repr(table)}")
             continue
         for key, value in table.items():
             if key not in SETTING_KEYS:
-                problem(f"{where}: unknown key {key!r}{suggestion(key, SETTING_KEYS)}; allowed keys: kh, tol")
+                problem(f"{where}: unknown key {short_repr(key)}{suggestion(key, SETTING_KEYS)}; allowed keys: kh, tol")
             else:
                 own.setdefault(name, {})[key] = _sweep(value, key, where, problem)
 
@@ -429,7 +431,7 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
         _check_work(sweeps.get("kh", []), where, scenes, problem)
     for scene in scenes:
         if scene.n_intervals + 1 > MAX_OUTPUT_POINTS:
-            problem(f"scene {scene.name!r}: its output grid has {scene.n_intervals + 1:.3g} points, more than "
+            problem(f"scene {short_repr(scene.name)}: its output grid has {scene.n_intervals + 1:.3g} points, more than "
                     f"{MAX_OUTPUT_POINTS:.0e} (duration_s / output_interval_s): raise output_interval_s")
 
     used = set()
@@ -494,7 +496,7 @@ def _check_steps_fit(kh_values: list[float], where: str, scenes: list[Scene], pr
     """A fixed step is at most one output interval Δ (``integrators.fixed_step``): kh ≤ k·Δ in every scene."""
     for scene in scenes:
         message = coarse_steps_problem(kh_values, scene.params.pendulum_frequency_rad_s, scene.output_interval_s,
-                                       f"scene {scene.name!r}")
+                                       f"scene {short_repr(scene.name)}")
         if message:
             problem(f"{where}: {message}")
 
@@ -504,6 +506,6 @@ def _check_work(kh_values: list[float], where: str, scenes: list[Scene], problem
     for scene in scenes:
         for value in kh_values:
             message = step_count_problem(value, scene.params.pendulum_frequency_rad_s, scene.duration_s,
-                                         f"scene {scene.name!r}")
+                                         f"scene {short_repr(scene.name)}")
             if message:
                 problem(f"{where}: {message}")
