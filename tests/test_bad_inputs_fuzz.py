@@ -159,7 +159,8 @@ CASES: tuple[Case, ...] = (
     matrix_case("azimuth listed twice", TINY + "release_azimuth_deg = [45, 45.0]\n", "listed more than once"),
     matrix_case("azimuth variant name too long",
                 f'integrators = ["rk4"]\nkh = [0.2]\nrelease_azimuth_deg = [0.125]\n'
-                f'[scene.{"a" * (MAX_SCENE_NAME_LENGTH - 4)}]\nbase = "seed_2min"\n', "release_azimuth_deg = 0.125"),
+                f'[scene.{"a" * (MAX_SCENE_NAME_LENGTH - 4)}]\nbase = "seed_2min"\n',
+                f"-az0.125' has {MAX_SCENE_NAME_LENGTH + 4} characters"),
     matrix_case("azimuth not a number", TINY + 'release_azimuth_deg = ["east"]\n', "list of finite numbers"),
     # --- run options ---
     Case("run timeout 3e6 s", ("run", "--matrix", "{d}/m.toml", "--db", "{d}/r.sqlite", "--run-timeout", "3e6"),

@@ -200,4 +200,18 @@ def test_a_variant_name_past_the_length_limit_is_one_line_naming_the_azimuth():
         parse_matrix({"scene": {name: {"base": "seed_2min"}}, "integrators": ["rk4"], "kh": [0.2],
                       "release_azimuth_deg": [5, 0.125]}, source="m")
     (problem,) = caught.value.problems
-    assert problem.startswith(f"m: release_azimuth_deg = 0.125 of scene {name!r}: scene name ")
+    assert problem.startswith(f"m: scene name '{name}-az0.125' has {MAX_SCENE_NAME_LENGTH + 4} characters, more than ")
+
+
+def test_a_variant_whose_release_lifts_the_bob_to_the_pivot_is_refused_naming_its_azimuth():
+    """The speed limit depends on the release direction: a sideways push just below it (azimuth 90° with
+    velocity along x) becomes a push along the string's swing (azimuth 0°), refused for that variant only."""
+    from foucault_bench.bench.problems.scenes import SCENES
+
+    params = SCENES["lab_3m"].params  # released at azimuth 90°: x is sideways
+    sideways_limit = (2 * params.gravity_m_s2 * (params.length_m**2 - params.amplitude_m**2) ** 0.5) ** 0.5
+    with pytest.raises(InputError) as caught:
+        parse_matrix({"scene": {"lab": {"base": "lab_3m", "release_velocity_m_s": [0.9995 * sideways_limit, 0.0]}},
+                      "integrators": ["rk4"], "kh": [0.2], "release_azimuth_deg": [90, 0]}, source="m")
+    (problem,) = caught.value.problems
+    assert problem.startswith("m: release_azimuth_deg = 0 of scene 'lab': release_velocity_m_s = ")

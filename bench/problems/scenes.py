@@ -99,7 +99,7 @@ class Scene:
     def __post_init__(self) -> None:
         problems = grid_problems(self.params.small_swing_period_s, self.duration_s, self.output_interval_s)
         problems += physical_limit_problems(self.params)
-        name_problem = scene_name_problem(self.name)
+        name_problem = scene_name_problem(self.name, max_length=None)  # the length: a matrix's rule (see there)
         if name_problem:
             problems.insert(0, name_problem)
         if self.model not in MODELS:
@@ -127,11 +127,14 @@ class Scene:
         return Problem(model=self.model_object, params=self.params, t_out=self.output_grid())
 
 
-def scene_name_problem(name: Any) -> str | None:
-    """Why ``name`` cannot name a scene (characters, length), or ``None``."""
+def scene_name_problem(name: Any, max_length: int | None = MAX_SCENE_NAME_LENGTH) -> str | None:
+    """Why ``name`` cannot name a scene, or ``None``: its characters (``SCENE_NAME_PATTERN``, every scene) and
+    its length (``max_length``; ``bench.run.matrix`` holds every scene a matrix runs to
+    ``MAX_SCENE_NAME_LENGTH``, while a scene made inside a computation, such as the model variants
+    ``NAME.spherical`` of ``bench.problems.adequacy``, names no file and may be longer)."""
     if not isinstance(name, str) or not SCENE_NAME_PATTERN.fullmatch(name):
         return f"scene name {short_repr(name)} may hold only letters, digits, '_', '.' and '-'"
-    if len(name) > MAX_SCENE_NAME_LENGTH:
+    if max_length is not None and len(name) > max_length:
         return (f"scene name {short_repr(name)} has {len(name)} characters, more than {MAX_SCENE_NAME_LENGTH}: the "
                 "report's file names, made from it, must fit the 255 bytes a file name may have")
     return None

@@ -33,8 +33,9 @@ file's size. Settings whose work is absurd are refused with the estimate: more t
 (duration·k/kh) in a run, more than ``MAX_OUTPUT_POINTS`` points on a scene's output grid, a tolerance below the
 double-precision unit roundoff (no double-precision integrator can meet it; ``bench.validation``), or more than
 ``MAX_RUNS`` runs in the matrix (counted from the lists' lengths before their entries are checked). Variants of a
-scene made by ``release_azimuth_deg`` are named with ``azimuth_label``, which keeps distinct azimuths distinct,
-and no two scenes of a matrix may share a name.
+scene made by ``release_azimuth_deg`` are named with ``azimuth_label``, which keeps distinct azimuths distinct;
+no two scenes of a matrix may share a name, and none may have more than ``MAX_SCENE_NAME_LENGTH`` characters
+(``bench.problems.scenes``: what a report's file names fit).
 
 Plug-ins (``plugins``) are Python modules: importing one runs its code. They are imported only once the rest
 of the matrix is valid, and each must register at least one integrator.
@@ -213,7 +214,7 @@ def _validate(document: dict[str, Any], source: str, default_name: str, known_la
 
     plugins = _string_list(document, "plugins", problem, required=False)
     scenes = _release_azimuth_variants(_scenes(document, problem), document.get("release_azimuth_deg"), problem)
-    _check_unique_names(scenes, problem)
+    _check_names(scenes, problem)
     timing, run_timeout_s = _timing(document.get("timing", {}), problem)
     runs = _runs(document, scenes, plugins, timing, problem, known_later)
     if problems:
@@ -312,15 +313,20 @@ def _release_azimuth_variants(scenes: list[Scene], azimuths: Any, problem) -> li
                     assumptions=f"{scene.assumptions} Release azimuth swept by the matrix: {label}° from South "
                                 "towards East.".strip(),
                 ))
-            except InputError as error:
+            except InputError as error:  # the physical limits depend on the release azimuth
                 for message in error.problems:
                     problem(f"release_azimuth_deg = {label} of scene {short_repr(scene.name)}: {message}")
     return variants
 
 
-def _check_unique_names(scenes: list[Scene], problem) -> None:
-    """Every scene of a matrix has its own name: rows, references and report files are keyed by it."""
+def _check_names(scenes: list[Scene], problem) -> None:
+    """Every scene of a matrix has a name of at most ``MAX_SCENE_NAME_LENGTH`` characters, which every file
+    name a report derives from it fits (``bench.problems.scenes``), and a name of its own: rows, references and
+    report files are keyed by it."""
     for name, count in Counter(scene.name for scene in scenes).items():
+        message = scene_name_problem(name)
+        if message:
+            problem(message)
         if count > 1:
             problem(f"{count} scenes are named {short_repr(name)} (rows and report files are keyed by the scene name): "
                     "rename the inline scene or change the azimuth")
