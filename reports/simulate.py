@@ -409,7 +409,7 @@ def open_window(settings: SimulationSettings) -> InteractiveSimulation:
 def save_path_problems(path: Path) -> list[str]:
     """What keeps ``--save`` from writing ``path``, checked before any work (empty list: nothing): a suffix it
     can write (``SAVE_SUFFIXES``; ffmpeg installed for .mp4), an existing folder it may write in (never
-    created), not a folder itself."""
+    created), not a folder itself, and not a file the user may not write."""
     from matplotlib.animation import writers
 
     suffix = path.suffix.lower()
@@ -425,6 +425,8 @@ def save_path_problems(path: Path) -> list[str]:
                 else f"--save {path}: {folder} is not a folder"]
     if not os.access(folder, os.W_OK | os.X_OK):
         return [f"--save {path}: cannot write in the folder {folder}"]
+    if path.exists() and not os.access(path, os.W_OK):
+        return [f"--save {path}: the file is not writable"]
     return []
 
 

@@ -1,7 +1,8 @@
 """``foucault-bench check``: the CI gate — a thresholds file checked on stored rows or on a fresh matrix run.
 
-Exit status 0 when every bound holds, 1 when one fails, 2 on bad input (found before any matrix runs). The
-thresholds file format is described in ``bench.gate.thresholds``.
+Exit status 0 when every bound holds, 1 when one fails, 2 on bad input (found before any matrix runs), among
+it a stored matrix run that is not finished (``--allow-unfinished`` checks its rows anyway). The thresholds file
+format is described in ``bench.gate.thresholds``.
 """
 
 from __future__ import annotations
