@@ -196,6 +196,24 @@ def test_a_release_speed_that_lifts_the_bob_to_the_pivot_is_refused_at_the_right
         assert float(problem.split("must stay below ")[1].split(" m/s")[0]) == pytest.approx(limit, rel=1e-5)
 
 
+def test_a_release_from_rest_that_the_centrifugal_force_could_lift_to_the_pivot_is_refused() -> None:
+    """At the equator ω is horizontal (along −x); a bob released from rest near the axis (azimuth 0°) at
+    A = 0.99 L with Ω = 0.96 k has the Jacobi integral h₀ = g z₀ − ½|ω×r₀|² above −½Ω²L², the value level with
+    the pivot across the axis (y = ±L): the centrifugal force can lift it there. Released across the axis
+    (azimuth 90°) it cannot. Both numbers are computed here."""
+    k = math.sqrt(9.81 / 1.0)
+    fields = {"model": "spherical", "length_m": 1.0, "latitude_deg": 0.0, "amplitude_m": 0.99, "duration_s": 10.0,
+              "earth_rate_rad_s": 0.96 * k}
+    z0 = -math.sqrt(1.0 - 0.99**2)
+    omega = 0.96 * k
+    along_axis = 9.81 * z0 - 0.5 * omega**2 * z0**2  # r₀ = (A, 0, z₀): |ω×r₀|² = Ω² z₀²
+    across_axis = 9.81 * z0 - 0.5 * omega**2 * (0.99**2 + z0**2)  # r₀ = (0, A, z₀)
+    assert along_axis > -0.5 * omega**2 > across_axis
+    (problem,) = problems_of("lifted", {**fields, "release_azimuth_deg": 0.0})
+    assert "even from rest" in problem
+    assert scene_from_mapping("held", {**fields, "release_azimuth_deg": 90.0}).params.amplitude_m == 0.99
+
+
 def test_earths_rate_must_stay_below_the_pendulums_frequency() -> None:
     """Ω ≥ k = √(g/L) is refused (1e10 rad/s was accepted), naming k; just below it is a valid scene."""
     k = SCENES["seed_2min"].params.pendulum_frequency_rad_s
