@@ -22,7 +22,9 @@ stops being drawn there, and the figure says when it left and when the run diver
 exact solution and the turning points are drawn on top of the trail.
 
 ``--save`` writes an animation of the same view instead (no display needed): GIF with Pillow, MP4 with ffmpeg
-(a clear error when ffmpeg is not installed). The computation (``simulate``) is separate from the drawing
+(a clear error when ffmpeg is not installed). Its path is checked before anything is computed
+(``save_path_problems``) and the file is written whole or not at all (a temporary file renamed over it), with at
+most ``MAX_FRAMES`` frames at up to ``MAX_FPS`` frames per second. The computation (``simulate``) is separate from the drawing
 (``SimulationView``), so both are testable headless.
 """
 
