@@ -4,10 +4,18 @@ Every reader of user input collects *all* problems as one-line messages and rais
 ``bench.errors.InputError`` (exit status 2, no traceback). This module holds what those readers share:
 
 * ``suggestion``: the " (did you mean 'x'?)" hint for a misspelt name (``difflib.get_close_matches``);
+* ``short_repr`` / ``short_list``: a value or a list shown in a message, cut so that the message stays one short
+  line whatever the input holds;
 * ``is_number`` / ``finite_number``: a real number (not a bool), and one that is finite (optionally > 0);
 * ``built_in_names`` / ``read_toml``: the package's built-in TOML files (``bench/matrices``,
   ``bench/thresholds``, found with ``importlib.resources`` so that they work from a wheel as from a checkout)
-  and reading a built-in name or a path into a parsed document.
+  and reading a built-in name or a path into a parsed document;
+* the limits an integration setting must respect wherever it is given (a matrix's ``kh``/``tol`` sweeps and
+  ``foucault-bench simulate``'s ``--kh``/``--tol``): ``setting_problem`` (one kh or tolerance),
+  ``coarse_steps_problem`` (a fixed step is at most one output interval) and ``step_count_problem`` (at most
+  ``MAX_STEPS`` fixed steps), so that both refuse the same settings with the same words;
+* ``run_timeout_problem``: a per-run time limit (``--run-timeout``, ``run_timeout_s``) within what the
+  executors can wait (``MAX_RUN_TIMEOUT_S``).
 """
 
 from __future__ import annotations
@@ -24,6 +32,20 @@ from foucault_bench.bench.errors import InputError
 
 DATA_PACKAGE = "foucault_bench.bench"
 """The package whose folders hold the built-in TOML files (package data, see pyproject.toml)."""
+
+UNIT_ROUNDOFF = 2.0**-53
+"""Double-precision unit roundoff u = 2⁻⁵³ (Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed., §2.1):
+a tolerance below it cannot be met by any double-precision integrator (an adaptive one shrinks its step
+without end)."""
+MAX_STEPS = 1e10
+"""More fixed steps than this in one run is refused (about an hour per run even at 3 ns a step)."""
+STEP_FIT_RTOL = 1e-12
+"""A kh above k·Δ by less than this (relative) still fits one output interval Δ: k·Δ computed in floating point."""
+MAX_RUN_TIMEOUT_S = 1e6
+"""Largest per-run time limit (s), 11.6 days. The local executor waits for its workers with
+``multiprocessing.connection.wait``, i.e. poll(2), whose timeout is a C int of milliseconds: it overflows above
+2³¹ − 1 ms = 2 147 483.647 s (24.9 days; Python raises OverflowError "timeout is too large"). 10⁶ s stays a
+factor 2 below that and is 10⁵ times the slowest run of the built-in matrices (bench/README.md "Time limits")."""
 
 
 def suggestion(word: Any, choices: Iterable[Any]) -> str:
@@ -82,3 +104,66 @@ def read_toml(name_or_path: str | Path, *, folder: str, kind: str) -> tuple[dict
     except tomllib.TOMLDecodeError as error:  # its message carries "(at line L, column C)"
         raise InputError(f"{source}: not valid TOML: {error}") from None
     return document, source, directory
+
+
+def short_repr(value: Any, limit: int = 80) -> str:
+    """``repr(value)``, cut to its first 60 characters and its length when longer than ``limit`` (a message
+    stays one short line even for a value of a million characters; ``repr`` escapes newlines)."""
+    text = repr(value)
+    return text if len(text) <= limit else f"{text[:60]}…({len(text)} characters)"
+
+
+def short_list(items: Iterable[str], limit: int = 10) -> str:
+    """The items joined by commas, the first ``limit`` of them and how many there are in all when more."""
+    items = list(items)
+    shown = ", ".join(items[:limit])
+    return shown if len(items) <= limit else f"{shown}, … ({len(items)} in all)"
+
+
+def setting_problem(key: str, value: Any) -> str | None:
+    """Why ``value`` is not a usable ``kh`` (> 0, finite: the step in units of 1/k) or ``tol`` (in (0, 1) and
+    at least ``UNIT_ROUNDOFF``), or ``None``. ``key`` is ``"kh"`` or ``"tol"``."""
+    if type(value) is not float and not is_number(value):  # the type test first: sweeps are long lists of floats
+        return f"{key} entries must be numbers a float can hold, got {short_repr(value)}"
+    if key == "kh":
+        if not (math.isfinite(value) and value > 0):
+            return f"step size must be > 0: kh = {value!r} (kh = k·h, the step in units of 1/k)"
+        return None
+    if not 0.0 < value < 1.0:
+        return f"tolerance must lie in (0, 1): tol = {value!r}"
+    if value < UNIT_ROUNDOFF:
+        return (f"tol = {value!r} is below the double-precision unit roundoff 2^-53 ≈ 1.1e-16: "
+                "no double-precision integrator can meet it")
+    return None
+
+
+def coarse_steps_problem(kh_values: Iterable[float], frequency_rad_s: float, output_interval_s: float,
+                         what: str) -> str | None:
+    """A fixed step is at most one output interval Δ (``integrators.fixed_step``): the kh values above k·Δ, in
+    one message naming ``what`` (e.g. "scene 'pantheon'"), or ``None``."""
+    largest = frequency_rad_s * output_interval_s
+    too_coarse = [value for value in kh_values if value > largest * (1.0 + STEP_FIT_RTOL)]
+    if not too_coarse:
+        return None
+    return (f"kh = {short_list(f'{value:g}' for value in too_coarse)} exceeds what {what} allows: a step is at "
+            f"most one output interval, kh <= k·Δ = {largest:.4g}")
+
+
+def step_count_problem(kh: float, frequency_rad_s: float, duration_s: float, what: str) -> str | None:
+    """A fixed step of ``kh`` needs duration·k/kh steps: more than ``MAX_STEPS`` is refused, with the estimate."""
+    steps = duration_s * frequency_rad_s / kh
+    if steps <= MAX_STEPS:
+        return None
+    return (f"kh = {kh:g} needs about {steps:.2g} steps in {what} (duration {duration_s:g} s · k "
+            f"{frequency_rad_s:.4g} rad/s / kh), more than {MAX_STEPS:.0e}")
+
+
+def run_timeout_problem(value: Any, where: str) -> str | None:
+    """Why ``value`` is not a usable per-run time limit (a number of seconds in (0, ``MAX_RUN_TIMEOUT_S``]),
+    or ``None``."""
+    if not finite_number(value, positive=True):
+        return f"{where} must be a finite number of seconds > 0, got {short_repr(value)}"
+    if value > MAX_RUN_TIMEOUT_S:
+        return (f"{where} = {value:g} s is more than {MAX_RUN_TIMEOUT_S:.0e} s (11.6 days), the longest limit the "
+                "run executors can wait for (their poll(2) timeout overflows at 2^31 ms ≈ 24.9 days)")
+    return None

@@ -301,3 +301,69 @@ def test_order_is_fitted_on_error_columns_only():
     with pytest.raises(InputError, match="cannot take a min_order bound"):
         made_up_thresholds({"integrator": "rk4", "column": "energy_drift_per_s", "min_order": 4})
     assert "energy_drift_per_s" not in ERROR_COLUMNS
+
+
+# --- what a stored or named matrix is ---------------------------------------------------------------------------
+
+
+def _stored_run(db: Path, rows: int) -> str:
+    """A matrix run of 2 planned runs in ``db`` with ``rows`` of them stored and its status left 'running' (as
+    while it runs, or after a kill): the rows are hand-made, the provenance is the store's own."""
+    from foucault_bench.bench.run.matrix import parse_matrix
+    from foucault_bench.bench.run.store import ResultsStore
+
+    matrix = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [0.2, 0.1]})
+    with ResultsStore(db) as store:
+        matrix_id, _ = store.start_matrix_run(matrix, jobs=1, scheduler=None, resume=False)
+        for spec in matrix.runs[:rows]:
+            store.write_run(made_up_row(scene="seed_2min", integrator="rk4", kh=spec.kh, step_s=spec.step_s,
+                                        matrix_id=matrix_id, run_key=spec.run_key, precession_rate_ref_error=1e-9))
+    return matrix_id
+
+
+GATE_ON_STORED = ['[[bound]]', 'scene = "seed_2min"', 'integrator = "rk4"', 'column = "precession_rate_ref_error"',
+                  'max = 1e-6']
+
+
+def test_a_matrix_run_that_is_not_finished_is_refused_naming_its_status(tmp_path, capsys):
+    """A running (or killed) matrix run checked 1 of 2 rows and passed; now exit 2 naming the status and the
+    rows stored, for 'running' and 'interrupted'; --allow-unfinished checks the rows there are, with a note."""
+    from foucault_bench.bench.run.store import ResultsStore
+
+    db = tmp_path / "partial.sqlite"
+    matrix_id = _stored_run(db, rows=1)
+    thresholds = write_toml_lines(tmp_path / "gate.toml", GATE_ON_STORED)
+    for status in ("running", "interrupted"):
+        if status == "interrupted":
+            with ResultsStore(db) as store:
+                store.finish_matrix_run(matrix_id, "interrupted")
+        before = db.read_bytes()
+        assert run_cli(["check", "--thresholds", str(thresholds), "--results", str(db)]) == (2, "")
+        (line,) = capsys.readouterr().err.strip().splitlines()
+        assert f"is {status!r}, not 'finished': 1 of 2 planned rows are stored" in line and "--allow-unfinished" in line
+        assert db.read_bytes() == before
+    status, stdout = run_cli(["check", "--thresholds", str(thresholds), "--results", str(db), "--allow-unfinished"])
+    assert status == 0 and "pass" in stdout.lower()
+    assert "note: " in capsys.readouterr().err
+    with ResultsStore(db) as store:
+        store.finish_matrix_run(matrix_id)
+    assert run_cli(["check", "--thresholds", str(thresholds), "--results", str(db)])[0] == 0
+
+
+def test_the_matrix_a_thresholds_file_names_is_found_beside_it_and_nowhere_else(tmp_path, monkeypatch, capsys):
+    """``matrix = "m.toml"`` missing beside the thresholds file fell back to ./m.toml in the current folder;
+    now it is exit 2 naming the path beside the file, and a file beside it is the one read."""
+    gate, elsewhere = tmp_path / "gate", tmp_path / "elsewhere"
+    gate.mkdir()
+    elsewhere.mkdir()
+    (elsewhere / "m.toml").write_text('scenes = ["seed_2min"]\nintegrators = ["from_the_current_folder"]\nkh = [0.2]\n')
+    thresholds = write_toml_lines(gate / "gate.toml", ['matrix = "m.toml"', *GATE_ON_STORED])
+    monkeypatch.chdir(elsewhere)
+    assert main(["check", "--thresholds", str(thresholds), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert f"there is no file {gate / 'm.toml'}" in err and "from_the_current_folder" not in err
+    (gate / "m.toml").write_text('scenes = ["seed_2min"]\nintegrators = ["from_beside_the_file"]\nkh = [0.2]\n')
+    assert main(["check", "--thresholds", str(thresholds), "--no-progress"]) == 2
+    assert "'from_beside_the_file'" in capsys.readouterr().err
+    built_in = load_thresholds(write_toml_lines(gate / "named.toml", ['matrix = "quick"', *GATE_ON_STORED]))
+    assert built_in.matrix_to_run() == "quick"  # a built-in name, with no file of that name beside

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from foucault_bench.bench.cli import main as cli_main
+from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.run.matrix import built_in_matrices, load_matrix, parse_matrix
 from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR
 from foucault_bench.bench.problems.scenes import SCENES
@@ -159,3 +160,58 @@ def test_built_in_matrices_load_and_cover_every_built_in_family():
     assert {scene.name for scene in default.scenes} == set(SCENES)
     tolerances = sorted({run.tol for run in default.runs if run.tol is not None})
     assert tolerances[0] <= 1e-13 and tolerances[-1] >= 1e-4
+
+
+# --- generated scene names ------------------------------------------------------------------------------------
+
+
+def test_azimuth_variants_have_distinct_names_that_read_back_as_their_azimuths():
+    """45 and 45.0000001 both formatted as ``45`` with ``:g``: two scenes named seed_2min-az45, merged by the
+    report. The label is the float's shortest round-trip text, so each name reads back as its azimuth."""
+    azimuths = [45, 45.0000001, 0.1 + 0.2, 1e20, -1e-05, 359.99999999999994]
+    matrix = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [0.2],
+                           "release_azimuth_deg": azimuths})
+    names = [scene.name for scene in matrix.scenes]
+    assert len(set(names)) == len(azimuths)
+    assert names[:2] == ["seed_2min-az45", "seed_2min-az45.0000001"]
+    for scene, azimuth in zip(matrix.scenes, azimuths, strict=True):
+        assert float(scene.name.removeprefix("seed_2min-az")) == azimuth == scene.params.release_azimuth_deg
+
+
+def test_two_scenes_of_one_name_are_refused(monkeypatch):
+    """The guard behind the labels: with the old ``:g`` label the collision is one line, exit 2, not two
+    scenes merged."""
+    import foucault_bench.bench.run.matrix as matrix_module
+
+    monkeypatch.setattr(matrix_module, "azimuth_label", lambda azimuth: f"{azimuth:g}")
+    with pytest.raises(InputError) as caught:
+        parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [0.2],
+                      "release_azimuth_deg": [45, 45.0000001]}, source="m")
+    assert caught.value.problems == [
+        "m: 2 scenes are named 'seed_2min-az45' (rows and report files are keyed by the scene name): rename the "
+        "inline scene or change the azimuth"]
+
+
+def test_a_variant_name_past_the_length_limit_is_one_line_naming_the_azimuth():
+    from foucault_bench.bench.problems.scenes import MAX_SCENE_NAME_LENGTH
+
+    name = "s" * (MAX_SCENE_NAME_LENGTH - 4)
+    with pytest.raises(InputError) as caught:
+        parse_matrix({"scene": {name: {"base": "seed_2min"}}, "integrators": ["rk4"], "kh": [0.2],
+                      "release_azimuth_deg": [5, 0.125]}, source="m")
+    (problem,) = caught.value.problems
+    assert problem.startswith(f"m: scene name '{name}-az0.125' has {MAX_SCENE_NAME_LENGTH + 4} characters, more than ")
+
+
+def test_a_variant_whose_release_lifts_the_bob_to_the_pivot_is_refused_naming_its_azimuth():
+    """The speed limit depends on the release direction: a sideways push just below it (azimuth 90° with
+    velocity along x) becomes a push along the string's swing (azimuth 0°), refused for that variant only."""
+    from foucault_bench.bench.problems.scenes import SCENES
+
+    params = SCENES["lab_3m"].params  # released at azimuth 90°: x is sideways
+    sideways_limit = (2 * params.gravity_m_s2 * (params.length_m**2 - params.amplitude_m**2) ** 0.5) ** 0.5
+    with pytest.raises(InputError) as caught:
+        parse_matrix({"scene": {"lab": {"base": "lab_3m", "release_velocity_m_s": [0.9995 * sideways_limit, 0.0]}},
+                      "integrators": ["rk4"], "kh": [0.2], "release_azimuth_deg": [90, 0]}, source="m")
+    (problem,) = caught.value.problems
+    assert problem.startswith("m: release_azimuth_deg = 0 of scene 'lab': release_velocity_m_s = ")

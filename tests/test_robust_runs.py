@@ -23,7 +23,8 @@ import pytest
 
 from foucault_bench.bench.cli import main as cli_main
 from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.run.matrix import MAX_STEPS, load_matrix, parse_matrix
+from foucault_bench.bench.validation import MAX_STEPS
+from foucault_bench.bench.run.matrix import MAX_RUNS, load_matrix, parse_matrix
 from foucault_bench.bench.run.runner import WORKER_DIED, run_matrix
 from foucault_bench.bench.run.store import ResultsStore, compare_runs
 from foucault_bench.integrators import unregister
@@ -241,12 +242,31 @@ def test_plugins_are_imported_only_when_the_rest_is_valid(tmp_path, monkeypatch)
 
 
 def test_validation_of_a_long_sweep_finishes(tmp_path):
-    values = [0.2 * (1.0 - index / 400_000) for index in range(200_000)]
+    values = [0.2 * (1.0 - index / (2 * MAX_RUNS)) for index in range(MAX_RUNS)]
     matrix = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": values})
-    assert len(matrix.runs) == len(values)
+    assert len(matrix.runs) == len(values) == MAX_RUNS
     with pytest.raises(InputError) as caught:
-        parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [*values, values[7], -1.0]})
+        parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [*values[:-2], values[7], -1.0]})
     assert len(caught.value.problems) == 2
+
+
+def test_a_matrix_of_more_than_max_runs_is_refused_before_its_entries_are_read(monkeypatch):
+    """A million distinct kh values (the old code validated them for 14 s and 1 GB, then planned a million
+    runs): one line giving the count, and no entry is looked at (the per-entry check is never called)."""
+    import foucault_bench.bench.run.matrix as matrix_module
+
+    def never(*_):
+        raise AssertionError("an entry was validated")
+
+    monkeypatch.setattr(matrix_module, "setting_problem", never)
+    values = [0.2 * (1.0 - index / 2e6) for index in range(10**6)]
+    (problem,) = refusal({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": values})
+    assert f"expands to {10**6} runs" in problem and str(MAX_RUNS) in problem
+    # the count is scenes × settings summed over the integrators, each with its own sweep or the shared one
+    half = [0.1 * (1.0 - index / 1e6) for index in range(MAX_RUNS // 2 + 1)]
+    (problem,) = refusal({"scenes": ["seed_2min"], "integrators": ["rk4", "verlet", "cvode_bdf"], "kh": [0.1],
+                          "tol": [1e-6], "override": {"rk4": {"kh": half}, "verlet": {"kh": half}}})
+    assert f"expands to {2 * len(half) + 1} runs" in problem
 
 
 # --- read-only commands --------------------------------------------------------------------------------------
@@ -416,6 +436,34 @@ def test_bad_output_paths_and_options_are_refused_before_any_work(tmp_path, caps
         assert expected in err and "Traceback" not in err, (command, err)
         assert len([line for line in err.splitlines() if "error:" in line]) == 1
     assert sorted(path.name for path in tmp_path.iterdir()) == ["a_file"]  # nothing created
+
+
+def test_a_run_timeout_the_executors_cannot_wait_is_refused_before_anything_is_opened(tmp_path, capsys):
+    """--run-timeout 3e6 s passed validation, opened the matrix run and then raised OverflowError in the local
+    executor's wait (poll(2) takes a C int of milliseconds), leaving the run "interrupted". Now: exit 2, one
+    line, no database; and the documented maximum is one the wait accepts, a little more than the overflow
+    point is not."""
+    import multiprocessing
+    import multiprocessing.connection
+
+    from foucault_bench.bench.validation import MAX_RUN_TIMEOUT_S
+
+    matrix = write(tmp_path / "tiny.toml", 'scenes = ["seed_2min"]\nintegrators = ["rk4"]\nkh = [0.2]\n')
+    database = tmp_path / "results.sqlite"
+    for flag, value in (("--run-timeout", "3e6"), ("--run-timeout", str(MAX_RUN_TIMEOUT_S * 1.5))):
+        assert cli_main(["run", "--matrix", str(matrix), "--db", str(database), flag, value, "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+        assert f"--run-timeout = {float(value):g} s is more than 1e+06 s" in err
+        assert not database.exists()
+    (problem,) = refusal({"scenes": ["seed_2min"], "integrators": ["rk4"], "kh": [0.2],
+                          "timing": {"run_timeout_s": 3e6}})
+    assert "timing: run_timeout_s = 3e+06 s is more than 1e+06 s" in problem
+    ready, other_end = multiprocessing.Pipe()
+    other_end.send(b"x")  # so that the wait returns at once
+    assert multiprocessing.connection.wait([ready], timeout=MAX_RUN_TIMEOUT_S) == [ready]
+    with pytest.raises(OverflowError):
+        multiprocessing.connection.wait([ready], timeout=(2**31 + 1000) / 1000)
 
 
 def test_more_jobs_than_cores_are_capped_with_a_note(capsys):

@@ -1,4 +1,6 @@
-"""Scenes (built-in and inline) and the reference cache."""
+"""Scenes (built-in and inline) and the reference cache; what a scene may be: its name (characters, a length
+every report file name fits) and its physics (Earth's rate below the pendulum's frequency, a release that keeps
+the bob below the pivot's height)."""
 
 from __future__ import annotations
 
@@ -13,7 +15,9 @@ import pytest
 import foucault_bench.bench.problems.reference as reference_module
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.reference import CACHE_ENVIRONMENT_VARIABLE, cache_directory, load_cached, reference_for, reference_key
-from foucault_bench.bench.problems.scenes import MIN_OUTPUT_INTERVALS_PER_PERIOD, SCENES, scene_from_mapping
+from foucault_bench.bench.problems.scenes import (
+    MAX_SCENE_NAME_LENGTH, MIN_OUTPUT_INTERVALS_PER_PERIOD, SCENES, scene_from_mapping,
+)
 from foucault_bench.models import MODELS
 
 REAL_PENDULUMS = ("pantheon", "un_headquarters", "griffith", "south_pole", "lab_3m")
@@ -107,6 +111,116 @@ def test_inline_scene_grid_problems() -> None:
     assert len(typed) == 2
     assert problems_of("based", {"base": "panteon"}) == [
         "base: unknown scene 'panteon' (did you mean 'pantheon'?); built-in scenes: " + ", ".join(SCENES)]
+
+
+# --- names and physical limits ----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["lab\n", "lab\r", "\nlab", "lab name", "lab/x", ""])
+def test_scene_names_of_other_characters_are_refused(name: str) -> None:
+    """A final newline passed ``match`` with ``$``: the whole name must match."""
+    (problem,) = problems_of(name, {"base": "seed_2min"})
+    assert problem.startswith("scene name ") and "may hold only" in problem
+
+
+@pytest.mark.parametrize("name", ["l" * (MAX_SCENE_NAME_LENGTH + 1), "L" * 130, "x" * 250])
+def test_scene_names_too_long_for_a_report_are_refused_in_a_matrix(name: str) -> None:
+    """250 characters (or 130 capitals, 260 after file_stem's escaping) passed and made the report fail with
+    "File name too long". The limit is the matrix's: scenes made inside a computation may be longer."""
+    from foucault_bench.bench.run.matrix import parse_matrix
+
+    with pytest.raises(InputError) as error:
+        parse_matrix({"scene": {name: {"base": "seed_2min"}}, "integrators": ["rk4"], "kh": [0.2]}, source="m")
+    (problem,) = error.value.problems
+    assert f"has {len(name)} characters, more than {MAX_SCENE_NAME_LENGTH}" in problem
+    assert scene_from_mapping(name, {"base": "seed_2min"}).name == name
+
+
+def test_a_report_for_the_longest_scene_name_writes_every_file_within_255_bytes(tmp_path, monkeypatch) -> None:
+    """The worst case end to end: a name of MAX_SCENE_NAME_LENGTH capitals (file_stem doubles each) through
+    the report itself, with every chart that carries a scene name (work-precision for each verdict,
+    convergence, tolerance). Every file it writes has a name of at most 255 bytes, the stem really is in the
+    derived names, and the longest leaves room (≥ 32 bytes) for a temporary file's decoration. The charts are
+    written by the report's own ``charts.save`` with an empty figure in place of the drawn one (drawing them
+    takes a minute on a loaded machine and changes no file name)."""
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    import foucault_bench.reports.charts as charts
+    from foucault_bench.reports.build import ReportInputs, build_report, file_stem
+    from test_reports import results_fixture
+
+    real_save = charts.save
+    monkeypatch.setattr(charts, "save", lambda figure, stem: real_save(Figure(figsize=(1, 1)), stem))
+    longest = "L" * MAX_SCENE_NAME_LENGTH
+    scene_from_mapping(longest, {"base": "seed_2min"})  # accepted
+    runs = results_fixture()
+    runs = runs[(runs["scene"] == "lab") & runs["integrator"].isin(["rk4", "heyoka_taylor"])].copy()
+    runs["scene"] = longest
+    build_report(ReportInputs(runs=pd.DataFrame(runs), include_seed=False, interactive=False), tmp_path)
+    names = [path.name for path in tmp_path.rglob("*")]
+    stem = file_stem(longest)
+    assert len(stem) == 2 * MAX_SCENE_NAME_LENGTH
+    derived = [name for name in names if stem in name]
+    assert {name.split(stem)[0] for name in derived} >= {"work_precision_", "convergence_", "tolerance_"}
+    assert max(len(name.encode()) for name in names) <= 255 - 32, max(names, key=len)
+
+
+def _jacobi_margin_speed(params) -> float:
+    """The largest release speed along the scene's velocity direction that keeps the spherical model's Jacobi
+    integral h = ½|ṙ|² + g z − ½|ω×r|² below −½|ω|²L² (its least value at the pivot's height), computed here
+    from the vectors (numpy cross products), independently of bench.problems.scenes."""
+    length, g = params.length_m, params.gravity_m_s2
+    psi = math.radians(params.release_azimuth_deg)
+    x, y = params.amplitude_m * math.cos(psi), params.amplitude_m * math.sin(psi)
+    z = -math.sqrt(length**2 - x**2 - y**2)
+    direction = np.array(params.release_velocity_m_s) / math.hypot(*params.release_velocity_m_s)
+    unit_velocity = np.array([direction[0], direction[1], -(x * direction[0] + y * direction[1]) / z])
+    omega = np.array(params.omega_vector_rad_s)
+    at_rest = g * z - 0.5 * np.sum(np.cross(omega, [x, y, z]) ** 2) + 0.5 * np.sum(omega**2) * length**2
+    return math.sqrt(-2.0 * at_rest / np.sum(unit_velocity**2))
+
+
+@pytest.mark.parametrize(("base", "direction"), [("seed_2min", (1.0, 0.0)), ("lab_3m", (0.0, 1.0)),
+                                                   ("airy_3m", (0.6, -0.8))])
+def test_a_release_speed_that_lifts_the_bob_to_the_pivot_is_refused_at_the_right_speed(base, direction) -> None:
+    """Accepted just below the speed that lifts the bob to the pivot's height (recomputed here), refused just
+    above it and at 1e300 m/s (accepted before), with the limit in the message."""
+    probe = dataclasses.replace(SCENES[base].params, release_velocity_m_s=direction)
+    limit = _jacobi_margin_speed(probe)
+    below = scene_from_mapping("fast", {"base": base, "release_velocity_m_s": [0.999 * limit * c for c in direction]})
+    assert math.hypot(*below.params.release_velocity_m_s) < limit
+    for speed in (1.001 * limit, 1e300):
+        (problem,) = problems_of("fast", {"base": base, "release_velocity_m_s": [speed * c for c in direction]})
+        assert "release_velocity_m_s" in problem and "pivot's height" in problem
+        assert float(problem.split("must stay below ")[1].split(" m/s")[0]) == pytest.approx(limit, rel=1e-5)
+
+
+def test_a_release_from_rest_that_the_centrifugal_force_could_lift_to_the_pivot_is_refused() -> None:
+    """At the equator ω is horizontal (along −x); a bob released from rest near the axis (azimuth 0°) at
+    A = 0.99 L with Ω = 0.96 k has the Jacobi integral h₀ = g z₀ − ½|ω×r₀|² above −½Ω²L², the value level with
+    the pivot across the axis (y = ±L): the centrifugal force can lift it there. Released across the axis
+    (azimuth 90°) it cannot. Both numbers are computed here."""
+    k = math.sqrt(9.81 / 1.0)
+    fields = {"model": "spherical", "length_m": 1.0, "latitude_deg": 0.0, "amplitude_m": 0.99, "duration_s": 10.0,
+              "earth_rate_rad_s": 0.96 * k}
+    z0 = -math.sqrt(1.0 - 0.99**2)
+    omega = 0.96 * k
+    along_axis = 9.81 * z0 - 0.5 * omega**2 * z0**2  # r₀ = (A, 0, z₀): |ω×r₀|² = Ω² z₀²
+    across_axis = 9.81 * z0 - 0.5 * omega**2 * (0.99**2 + z0**2)  # r₀ = (0, A, z₀)
+    assert along_axis > -0.5 * omega**2 > across_axis
+    (problem,) = problems_of("lifted", {**fields, "release_azimuth_deg": 0.0})
+    assert "even from rest" in problem
+    assert scene_from_mapping("held", {**fields, "release_azimuth_deg": 90.0}).params.amplitude_m == 0.99
+
+
+def test_earths_rate_must_stay_below_the_pendulums_frequency() -> None:
+    """Ω ≥ k = √(g/L) is refused (1e10 rad/s was accepted), naming k; just below it is a valid scene."""
+    k = SCENES["seed_2min"].params.pendulum_frequency_rad_s
+    for rate in (1e10, k):
+        (problem,) = problems_of("spun", {"base": "seed_2min", "earth_rate_rad_s": rate})
+        assert "earth_rate_rad_s" in problem and f"{k:.6g} rad/s" in problem
+    assert scene_from_mapping("spun", {"base": "seed_2min", "earth_rate_rad_s": 0.9 * k}).params.earth_rate_rad_s
 
 
 # --- the reference cache ----------------------------------------------------------------------------------------

@@ -2,7 +2,8 @@
 rate readout as the physics says (no precession at the equator, the sense flips in the south, the rate
 scales with Earth's rate); the sliders keep to their grids and bound each other; what the figure says (title,
 errors, divergence, Airy's rate) is true and inside it; --save writes an animation or says clearly why it
-cannot."""
+cannot, checks its path before any work and never leaves a partial file; bad settings are refused with the
+words a matrix uses."""
 
 from __future__ import annotations
 
@@ -341,3 +342,124 @@ def test_bad_arguments_are_reported_together() -> None:
     with pytest.raises(InputError, match="--tol"):
         settings_from_args(args)
     assert math.isclose(settings_from_args(parser.parse_args(["--integrator", "cvode_adams"])).setting, 1e-10)
+
+
+# --- bad input and --save: refused before any work, written whole or not at all ------------------------------
+
+TINY = ["--length", "10", "--amplitude", "0.5", "--hours", "0.02", "--frames", "2", "--fps", "5"]
+
+
+def _no_work(monkeypatch) -> None:
+    """Make any simulation an error, so that a refusal is known to come before the work."""
+    import foucault_bench.reports.simulate as simulate_module
+
+    def refuse(*_args, **_kwargs):
+        raise AssertionError("the simulation ran before the arguments were refused")
+
+    monkeypatch.setattr(simulate_module, "simulate", refuse)
+
+
+def _one_error_line(capsys) -> str:
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    return lines[0]
+
+
+def test_save_into_a_missing_folder_creates_no_folder_and_does_no_work(tmp_path: Path, monkeypatch, capsys) -> None:
+    from foucault_bench.bench.cli import main as cli_main
+
+    _no_work(monkeypatch)
+    target = tmp_path / "missing" / "deeper" / "swing.gif"
+    assert cli_main(["simulate", "--save", str(target), *TINY]) == 2
+    assert "does not exist" in _one_error_line(capsys)
+    assert list(tmp_path.iterdir()) == []  # the old code made missing/deeper (at the root for /nonexistent/x.gif)
+
+
+def test_save_into_a_folder_it_cannot_write_is_refused_before_any_work(tmp_path: Path, monkeypatch, capsys) -> None:
+    """A folder without write permission (os.access says so; root would bypass a chmod, so access is what
+    the check asks and what the test sets) is one line, before the simulation."""
+    import os
+
+    from foucault_bench.bench.cli import main as cli_main
+
+    _no_work(monkeypatch)
+    folder = tmp_path / "read_only"
+    folder.mkdir()
+    real_access = os.access
+    monkeypatch.setattr(os, "access", lambda path, mode, **kw: Path(path) != folder and real_access(path, mode, **kw))
+    assert cli_main(["simulate", "--save", str(folder / "swing.gif"), *TINY]) == 2
+    assert "cannot write in the folder" in _one_error_line(capsys)
+    assert list(folder.iterdir()) == []
+
+
+def test_a_failed_write_leaves_the_old_file_whole_and_no_partial_file(tmp_path: Path, monkeypatch, capsys) -> None:
+    """A full disk while the GIF is written (ENOSPC after some bytes): one line naming the reason, the
+    earlier file at --save unchanged, no temporary file left."""
+    import errno
+    import os
+
+    from PIL import Image
+
+    from foucault_bench.bench.cli import main as cli_main
+
+    target = tmp_path / "swing.gif"
+    target.write_bytes(b"the earlier animation")
+
+    def disk_full(image, fp, *args, **kwargs):
+        Path(fp).write_bytes(b"GIF89a partial")
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(Image.Image, "save", disk_full)
+    assert cli_main(["simulate", "--save", str(target), *TINY]) == 2
+    assert os.strerror(errno.ENOSPC) in _one_error_line(capsys)
+    assert target.read_bytes() == b"the earlier animation"
+    assert [path.name for path in tmp_path.iterdir()] == ["swing.gif"]
+
+
+def test_a_saved_animation_replaces_the_file_and_leaves_nothing_else(tmp_path: Path, capsys) -> None:
+    from PIL import Image
+
+    from foucault_bench.bench.cli import main as cli_main
+
+    target = tmp_path / "swing.gif"
+    target.write_bytes(b"the earlier animation")
+    assert cli_main(["simulate", "--save", str(target), *TINY]) == 0
+    with Image.open(target) as image:
+        assert image.format == "GIF" and image.n_frames == 2
+    assert [path.name for path in tmp_path.iterdir()] == ["swing.gif"]
+
+
+@pytest.mark.parametrize(("argv", "expected"), [
+    (["--integrator", "cvode_bdf", "--tol", "1e-300"], "below the double-precision unit roundoff"),  # hung before
+    (["--kh", "1e-12"], "steps in this simulation"),
+    (["--kh", "0.5"], "at most one output interval"),
+    (["--kh", "nan"], "step size must be > 0"),
+    (["--frames", str(10**8)], "--frames must lie in [2, 200]"),  # 19 s and 1.8 GB before
+    (["--fps", "1000"], "--fps must lie in [1, 50]"),
+    (["--earth-rate", "1e10"], "must be below the pendulum's own frequency"),
+    (["--hours", "1e306"], "output points, more than"),  # refused before too: kept so that the grid never overflows
+])
+def test_simulate_refuses_what_would_hang_or_exhaust_memory(argv: list[str], expected: str, monkeypatch) -> None:
+    _no_work(monkeypatch)
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    with pytest.raises(InputError) as error:
+        settings_from_args(parser.parse_args(argv))
+    assert len(error.value.problems) == 1 and expected in error.value.problems[0], error.value.problems
+
+
+def test_simulate_and_matrices_refuse_a_setting_in_the_same_words() -> None:
+    """One validation function (bench.validation.setting_problem) for both, not two near-copies."""
+    from foucault_bench.bench.run.matrix import parse_matrix
+
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    for option, key, integrator, value in (("--tol", "tol", "cvode_bdf", 1e-300), ("--kh", "kh", "rk4", -0.5)):
+        with pytest.raises(InputError) as from_simulate:
+            settings_from_args(parser.parse_args(["--integrator", integrator, option, str(value)]))
+        with pytest.raises(InputError) as from_matrix:
+            parse_matrix({"scenes": ["seed_2min"], "integrators": [integrator], key: [value]}, source="m")
+        (simulate_message,) = from_simulate.value.problems
+        (matrix_message,) = from_matrix.value.problems
+        assert simulate_message.removeprefix(f"{option}: ") == matrix_message.removeprefix(f"m: {key}: ")

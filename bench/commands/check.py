@@ -1,7 +1,8 @@
 """``foucault-bench check``: the CI gate — a thresholds file checked on stored rows or on a fresh matrix run.
 
-Exit status 0 when every bound holds, 1 when one fails, 2 on bad input (found before any matrix runs). The
-thresholds file format is described in ``bench.gate.thresholds``.
+Exit status 0 when every bound holds, 1 when one fails, 2 on bad input (found before any matrix runs), among
+it a stored matrix run that is not finished (``--allow-unfinished`` checks its rows anyway). The thresholds file
+format is described in ``bench.gate.thresholds``.
 """
 
 from __future__ import annotations
@@ -23,6 +24,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "named in the thresholds file)")
     parser.add_argument("--matrix-id", metavar="ID",
                         help="with --results: the stored matrix run to check (id or unique prefix; default: latest)")
+    parser.add_argument("--allow-unfinished", action="store_true",
+                        help="with --results: also check a matrix run that is not finished (status running or "
+                             "interrupted: only some of its rows are stored), with a note; without it such a run "
+                             "is refused (exit 2)")
     parser.add_argument("--db", metavar="FILE",
                         help="when running a matrix: keep its results in this database (default: a temporary one)")
     parser.add_argument("--jobs", type=int, default=None, help="worker processes when running a matrix "
@@ -31,8 +36,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="table format on stdout (markdown for CI job summaries; default: %(default)s)")
     parser.add_argument("--junit", metavar="FILE", help="also write the checks as JUnit XML")
     parser.add_argument("--run-timeout", type=float, default=None, metavar="SECONDS",
-                        help="when running a matrix: per-run time limit (default: the matrix's [timing] "
-                             "run_timeout_s, else 600 s); a run past it is stored with status timeout")
+                        help="when running a matrix: per-run time limit, at most 1e6 s (default: the matrix's "
+                             "[timing] run_timeout_s, else 600 s); a run past it is stored with status timeout")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars while running a matrix")
 
 
@@ -55,17 +60,16 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("--matrix-id selects a stored run: give it with --results")
     if args.db and args.results:
         raise InputError("--db is where a fresh matrix run is kept; with --results give the database there")
+    if args.allow_unfinished and not args.results:
+        raise InputError("--allow-unfinished is for a stored matrix run: give it with --results")
     matrix_file = None if args.results else _user_file(args.matrix or thresholds.matrix_to_run())
     distinct_from_inputs({"--db": args.db, "--junit": args.junit},
                          {"--thresholds": _user_file(args.thresholds), "--results": args.results, "--matrix": matrix_file},
                          databases=("--results",))
     if args.results:
-        from foucault_bench.bench.run.store import ResultsStore
+        from foucault_bench.bench.gate.check import stored_rows_for_check
 
-        with ResultsStore(args.results, create=False) as store:
-            matrix_id = store.resolve_matrix_id(args.matrix_id)
-            frame = store.frame(matrix_id)
-        what = f"matrix run {matrix_id} in {args.results}"
+        frame, what = stored_rows_for_check(args.results, args.matrix_id, allow_unfinished=args.allow_unfinished)
     else:
         from foucault_bench.bench.gate.check import run_for_check
 

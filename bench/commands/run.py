@@ -30,8 +30,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="run on a Dask distributed cluster (e.g. tcp://127.0.0.1:8786) instead of local workers "
                              "(needs the 'dask' extra)")
     parser.add_argument("--run-timeout", type=float, metavar="SECONDS",
-                        help="per-run time limit: a run past it is stopped and stored with status timeout "
-                             "(default: the matrix's [timing] run_timeout_s, else 600 s)")
+                        help="per-run time limit, at most 1e6 s: a run past it is stopped and stored with status "
+                             "timeout (default: the matrix's [timing] run_timeout_s, else 600 s)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
 
 

@@ -19,7 +19,7 @@ from foucault_bench.bench.gate.thresholds import (
     MIN_ORDER_SETTINGS, SETTING_RELATIVE_TOLERANCE, Counterpart, Selection, Thresholds,
 )
 from foucault_bench.bench.schema import setting_label
-from foucault_bench.bench.validation import suggestion
+from foucault_bench.bench.validation import short_list, short_repr, suggestion
 
 if TYPE_CHECKING:  # for annotations only: bench.run.matrix imports the scenes and the integrators
     from foucault_bench.bench.run.matrix import Matrix
@@ -109,22 +109,22 @@ def validate_against(thresholds: Thresholds, frame: pd.DataFrame, *, what: str) 
         own = []
         for scene in bound.selection.scenes:
             if scene not in known_scenes:
-                own.append(f"{where}: unknown scene {scene!r}{suggestion(scene, known_scenes)}")
+                own.append(f"{where}: unknown scene {short_repr(scene)}{suggestion(scene, known_scenes)}")
             elif scene not in scenes:
-                own.append(f"{where}: scene {scene!r} has no rows in {what} (its scenes: {', '.join(scenes)})")
+                own.append(f"{where}: scene {short_repr(scene)} has no rows in {what} (its scenes: {short_list(scenes)})")
         names = list(bound.selection.integrators)
         if bound.relative_to is not None:
             names.append(bound.relative_to.integrator)
         for name in names:
             if name not in known_integrators:
-                own.append(f"{where}: unknown integrator {name!r}{suggestion(name, known_integrators)}; "
+                own.append(f"{where}: unknown integrator {short_repr(name)}{suggestion(name, known_integrators)}; "
                            f"known integrators: {', '.join(sorted(known_integrators))}")
             elif name not in integrators:
-                own.append(f"{where}: integrator {name!r} has no rows in {what} "
+                own.append(f"{where}: integrator {short_repr(name)} has no rows in {what} "
                            f"(its integrators: {', '.join(integrators)})")
         family = bound.selection.family
         if family is not None and family not in known_families:
-            own.append(f"{where}: unknown family {family!r}{suggestion(family, known_families)}; "
+            own.append(f"{where}: unknown family {short_repr(family)}{suggestion(family, known_families)}; "
                        f"known families: {', '.join(sorted(known_families))}")
         if own:
             problems += own
@@ -133,7 +133,7 @@ def validate_against(thresholds: Thresholds, frame: pd.DataFrame, *, what: str) 
         if rows.empty:
             settings = sorted({setting_label(row["kh"], row["tol"]) for _, row in frame[
                 frame["scene"].isin(bound.selection.scenes)].iterrows()})
-            problems.append(f"{where}: matches no row of {what} (settings there: {', '.join(settings)})")
+            problems.append(f"{where}: matches no row of {what} (settings there: {short_list(settings)})")
         elif bound.kind == "min_order":
             problems += _sweep_problems(rows, where)
         elif bound.kind == "max_ratio":
@@ -141,7 +141,7 @@ def validate_against(thresholds: Thresholds, frame: pd.DataFrame, *, what: str) 
                               if counterpart_row(frame, row, bound.relative_to) is None})
             if missing:
                 problems.append(f"{where}: {bound.relative_to.integrator} has no row to compare with at "
-                                f"{', '.join(missing)} in {what}")
+                                f"{short_list(missing)} in {what}")
     if problems:
         raise InputError(problems)
 

@@ -5,7 +5,7 @@ A thresholds file (TOML, read with ``tomllib``) is a list of bounds. Each bound 
 
     description = "what this gate protects"
     matrix = "quick"                 # run when check gets neither --results nor --matrix (a built-in name,
-                                     # or a path relative to this file)
+                                     # or a path relative to this file's folder, never to the current one)
 
     [[bound]]
     scene = "pantheon"               # a scene name or a list of names (required)
@@ -46,7 +46,7 @@ from typing import Any
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.schema import COLUMN_NAMES, VERDICT_COLUMNS
-from foucault_bench.bench.validation import built_in_names, finite_number, read_toml, suggestion
+from foucault_bench.bench.validation import built_in_names, finite_number, read_toml, short_repr, suggestion
 
 BUILT_IN_FOLDER = "thresholds"
 """Package folder of the built-in thresholds files (``bench/thresholds/NAME.toml``, package data)."""
@@ -126,8 +126,8 @@ class Bound:
 
 @dataclass(frozen=True)
 class Thresholds:
-    """A validated thresholds file. ``matrix`` is the matrix it names (a built-in name or a path; a relative
-    path is resolved against ``directory``, the file's own directory, when a file is there)."""
+    """A validated thresholds file. ``matrix`` is the matrix it names: a built-in matrix name or a path, which
+    is relative to ``directory``, the file's own folder, and to nothing else (never the current folder)."""
 
     description: str
     matrix: str | None
@@ -136,10 +136,19 @@ class Thresholds:
     directory: Path | None = None
 
     def matrix_to_run(self) -> str | None:
-        if self.matrix is None or self.directory is None or Path(self.matrix).is_absolute():
+        """The matrix to load: a file beside the thresholds file (or at an absolute path), else a built-in
+        matrix name; ``InputError`` when the file named is not there."""
+        from foucault_bench.bench.run.matrix import built_in_matrices
+
+        if self.matrix is None or self.directory is None:  # a built-in thresholds file names built-in matrices
             return self.matrix
-        beside = self.directory / self.matrix
-        return str(beside) if beside.is_file() else self.matrix
+        path = self.directory / self.matrix  # an absolute self.matrix stays itself
+        if path.is_file():
+            return str(path)
+        if self.matrix in built_in_matrices():
+            return self.matrix
+        raise InputError(f"{self.source}: matrix = {short_repr(self.matrix)}: there is no file {path} (a path in a "
+                         "thresholds file is relative to the file's own folder) and no built-in matrix of that name")
 
 
 
@@ -164,17 +173,17 @@ def parse_thresholds(document: dict[str, Any], *, source: str = "thresholds",
     problems: list[str] = []
     for key in document:
         if key not in TOP_LEVEL_KEYS:
-            problems.append(f"{source}: unknown key {key!r}{suggestion(key, TOP_LEVEL_KEYS)}; "
+            problems.append(f"{source}: unknown key {short_repr(key)}{suggestion(key, TOP_LEVEL_KEYS)}; "
                             f"allowed keys: {', '.join(TOP_LEVEL_KEYS)}")
     description = document.get("description", "")
     if not isinstance(description, str):
-        problems.append(f"{source}: description must be a string, got {description!r}")
+        problems.append(f"{source}: description must be a string, got {short_repr(description)}")
     matrix = document.get("matrix")
     if matrix is not None and not (isinstance(matrix, str) and matrix):
-        problems.append(f"{source}: matrix must be a matrix name or path, got {matrix!r}")
+        problems.append(f"{source}: matrix must be a matrix name or path, got {short_repr(matrix)}")
     tables = document.get("bound", [])
     if not isinstance(tables, list) or not all(isinstance(table, dict) for table in tables):
-        problems.append(f"{source}: bound must be an array of tables ([[bound]] sections), got {tables!r}")
+        problems.append(f"{source}: bound must be an array of tables ([[bound]] sections), got {short_repr(tables)}")
         tables = []
     elif not tables:
         problems.append(f"{source}: no bounds: add [[bound]] sections")
@@ -182,7 +191,7 @@ def parse_thresholds(document: dict[str, Any], *, source: str = "thresholds",
     for number, table in enumerate(tables, start=1):
         where = f"{source}: bound #{number}"
         own: list[str] = []
-        bound = _parse_bound(number, table, lambda message, where=where: own.append(f"{where}: {message}"))
+        bound = _parse_bound(number, table, lambda message, where=where, own=own: own.append(f"{where}: {message}"))
         problems += own
         if not own:
             bounds.append(bound)
@@ -195,7 +204,7 @@ def parse_thresholds(document: dict[str, Any], *, source: str = "thresholds",
 def _parse_bound(number: int, table: dict[str, Any], problem) -> Bound | None:
     for key in table:
         if key not in BOUND_KEYS:
-            problem(f"unknown key {key!r}{suggestion(key, BOUND_KEYS)}; allowed keys: {', '.join(BOUND_KEYS)}")
+            problem(f"unknown key {short_repr(key)}{suggestion(key, BOUND_KEYS)}; allowed keys: {', '.join(BOUND_KEYS)}")
     scenes = _names(table, "scene", problem)
     if "scene" not in table:
         problem("scene: missing (a scene name or a list of names)")
@@ -204,7 +213,7 @@ def _parse_bound(number: int, table: dict[str, Any], problem) -> Bound | None:
     if ("integrator" in table) == ("family" in table):
         problem("give exactly one of integrator (a name or a list) and family")
     if family is not None and not (isinstance(family, str) and family):
-        problem(f"family must be a name, got {family!r}")
+        problem(f"family must be a name, got {short_repr(family)}")
     kh = _settings(table, "kh", problem)
     tol = _settings(table, "tol", problem)
     kh_min = _number(table, "kh_min", problem, positive=True)
@@ -229,7 +238,7 @@ def _parse_bound(number: int, table: dict[str, Any], problem) -> Bound | None:
     relative_to = _counterpart(kind, table.get("relative_to"), problem)
     basis = table.get("basis", "")
     if not isinstance(basis, str):
-        problem(f"basis must be a string (where the number comes from), got {basis!r}")
+        problem(f"basis must be a string (where the number comes from), got {short_repr(basis)}")
     return Bound(
         number=number,
         selection=Selection(scenes=tuple(scenes), integrators=tuple(integrators), family=family, kh=tuple(kh),
@@ -247,7 +256,7 @@ def _names(table: dict[str, Any], key: str, problem) -> list[str]:
     items = [value] if isinstance(value, str) else value
     if not isinstance(items, list) or not all(isinstance(item, str) and item for item in items) or \
             (key in table and not items):
-        problem(f"{key} must be a name or a non-empty list of names, got {value!r}")
+        problem(f"{key} must be a name or a non-empty list of names, got {short_repr(value)}")
         return []
     return list(dict.fromkeys(items))
 
@@ -256,7 +265,7 @@ def _number(table: dict[str, Any], key: str, problem, *, positive: bool = False)
         return None
     value = table[key]
     if not finite_number(value, positive=positive):
-        problem(f"{key} must be a finite number{' > 0' if positive else ''}, got {value!r}")
+        problem(f"{key} must be a finite number{' > 0' if positive else ''}, got {short_repr(value)}")
         return None
     return float(value)
 
@@ -269,7 +278,7 @@ def _settings(table: dict[str, Any], key: str, problem) -> list[float]:
     valid = (lambda item: item > 0) if key == "kh" else (lambda item: 0 < item < 1)
     if not items or not all(finite_number(item) and valid(item) for item in items):
         wanted = "> 0 (kh = k·h)" if key == "kh" else "in (0, 1)"
-        problem(f"{key} must be a number {wanted} or a non-empty list of them, got {value!r}")
+        problem(f"{key} must be a number {wanted} or a non-empty list of them, got {short_repr(value)}")
         return []
     return [float(item) for item in items]
 
@@ -278,13 +287,13 @@ def _limit(kind: str, table: dict[str, Any], problem) -> float | str:
     value = table[kind]
     if kind == "status":
         if value not in STATUSES:
-            problem(f"status must be one of {', '.join(STATUSES)}, got {value!r}")
+            problem(f"status must be one of {', '.join(STATUSES)}, got {short_repr(value)}")
         return str(value)
     if not finite_number(value):
-        problem(f"{kind} must be a finite number, got {value!r}")
+        problem(f"{kind} must be a finite number, got {short_repr(value)}")
         return math.nan
     if kind in ("max_abs", "min_order", "max_ratio") and value <= 0:
-        problem(f"{kind} must be > 0, got {value!r}")
+        problem(f"{kind} must be > 0, got {short_repr(value)}")
     return float(value)
 
 
@@ -300,12 +309,12 @@ def _check_column(kind: str, column: Any, problem) -> None:
     if column in allowed:
         return
     if column in MACHINE_COLUMNS:
-        problem(f"column {column!r} depends on the machine and its load: bound it only as max_ratio to another "
+        problem(f"column {short_repr(column)} depends on the machine and its load: bound it only as max_ratio to another "
                 "integrator measured in the same run (relative_to)")
     elif column in COLUMN_NAMES:
-        problem(f"column {column!r} cannot take a {kind} bound; columns it can: {', '.join(allowed)}")
+        problem(f"column {short_repr(column)} cannot take a {kind} bound; columns it can: {', '.join(allowed)}")
     else:
-        problem(f"unknown column {column!r}{suggestion(column, COLUMN_NAMES)}; "
+        problem(f"unknown column {short_repr(column)}{suggestion(column, COLUMN_NAMES)}; "
                 f"columns a {kind} bound can take: {', '.join(allowed)}")
 
 
@@ -319,12 +328,12 @@ def _counterpart(kind: str, value: Any, problem) -> Counterpart | None:
     if isinstance(value, dict) and isinstance(value.get("integrator"), str):
         extra = set(value) - {"integrator", "kh", "tol"}
         if extra or ("kh" in value and "tol" in value):
-            problem(f"relative_to takes integrator and one of kh or tol, got {value!r}")
+            problem(f"relative_to takes integrator and one of kh or tol, got {short_repr(value)}")
             return None
         kh, tol = _settings(value, "kh", problem), _settings(value, "tol", problem)
         if len(kh) > 1 or len(tol) > 1:
-            problem(f"relative_to takes a single setting, got {value!r}")
+            problem(f"relative_to takes a single setting, got {short_repr(value)}")
             return None
         return Counterpart(value["integrator"], kh[0] if kh else None, tol[0] if tol else None)
-    problem(f"max_ratio needs relative_to = \"INTEGRATOR\" or {{integrator = ..., kh = ...}}, got {value!r}")
+    problem(f"max_ratio needs relative_to = \"INTEGRATOR\" or {{integrator = ..., kh = ...}}, got {short_repr(value)}")
     return None

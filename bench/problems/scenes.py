@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any, Mapping
 import numpy as np
 
 from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.validation import finite_number, is_number, suggestion
+from foucault_bench.bench.validation import finite_number, is_number, short_repr, suggestion
 from foucault_bench.models import MODELS, SIDEREAL_EARTH_RATE_RAD_S, Model, PendulumParameters, get_model
 from foucault_bench.models.parameters import STANDARD_GRAVITY_M_S2
 
@@ -56,7 +56,17 @@ WHOLE_INTERVALS_RTOL = 1e-9
 SEED_EARTH_RATE_RAD_S = 2.0 * math.pi / (24.0 * 3600.0)
 """The seed note's ω = 2π/24 h (its §2): the solar, not the sidereal, day; 0.27 % below Ω_E."""
 
-SCENE_NAME_PATTERN = re.compile(r"^[A-Za-z0-9_.-]+$")
+SCENE_NAME_PATTERN = re.compile(r"[A-Za-z0-9_.-]+")
+"""What a scene name may hold; matched with ``fullmatch`` (``match`` with ``$`` would let a final newline by)."""
+
+MAX_SCENE_NAME_LENGTH = 64
+"""Longest scene name (characters; ASCII by ``SCENE_NAME_PATTERN``, so also bytes). A report names files after
+its scenes through ``reports.build.file_stem``, which writes a character as at most 2 (``A`` → ``-a``): 128
+bytes, leaving 127 of the 255 that a file name may have on Linux (NAME_MAX of ext4, XFS, Btrfs, tmpfs), macOS
+(APFS) and Windows (NTFS) for what the report adds around the stem. The longest such name today,
+``work_precision_<stem>_precession_rate_ref_error.png``, adds 45 bytes (a 173-byte name at this limit), which
+leaves 82 bytes for a longer prefix or suffix or a temporary file's decoration. tests/test_scenes.py builds a
+report for a name of this length in capitals and checks every file name it writes."""
 
 
 @dataclass(frozen=True)
@@ -88,10 +98,12 @@ class Scene:
 
     def __post_init__(self) -> None:
         problems = grid_problems(self.params.small_swing_period_s, self.duration_s, self.output_interval_s)
-        if not SCENE_NAME_PATTERN.match(self.name):
-            problems.insert(0, f"scene name {self.name!r} may hold only letters, digits, '_', '.' and '-'")
+        problems += physical_limit_problems(self.params)
+        name_problem = scene_name_problem(self.name, max_length=None)  # the length: a matrix's rule (see there)
+        if name_problem:
+            problems.insert(0, name_problem)
         if self.model not in MODELS:
-            problems.insert(0, f"model: unknown model {self.model!r}{suggestion(self.model, MODELS)}; "
+            problems.insert(0, f"model: unknown model {short_repr(self.model)}{suggestion(self.model, MODELS)}; "
                                f"known models: {', '.join(MODELS)}")
         if problems:
             raise InputError(problems)
@@ -115,14 +127,74 @@ class Scene:
         return Problem(model=self.model_object, params=self.params, t_out=self.output_grid())
 
 
+def scene_name_problem(name: Any, max_length: int | None = MAX_SCENE_NAME_LENGTH) -> str | None:
+    """Why ``name`` cannot name a scene, or ``None``: its characters (``SCENE_NAME_PATTERN``, every scene) and
+    its length (``max_length``; ``bench.run.matrix`` holds every scene a matrix runs to
+    ``MAX_SCENE_NAME_LENGTH``, while a scene made inside a computation, such as the model variants
+    ``NAME.spherical`` of ``bench.problems.adequacy``, names no file and may be longer)."""
+    if not isinstance(name, str) or not SCENE_NAME_PATTERN.fullmatch(name):
+        return f"scene name {short_repr(name)} may hold only letters, digits, '_', '.' and '-'"
+    if max_length is not None and len(name) > max_length:
+        return (f"scene name {short_repr(name)} has {len(name)} characters, more than {MAX_SCENE_NAME_LENGTH}: the "
+                "report's file names, made from it, must fit the 255 bytes a file name may have")
+    return None
+
+
+def physical_limit_problems(params: PendulumParameters) -> list[str]:
+    """What puts a pendulum outside what the models describe (empty list: nothing). Two limits:
+
+    * **Earth's rate below the pendulum's frequency**, Ω < k = √(g/L). The rotating-frame models describe a swing
+      whose plane Earth turns slowly: by π Ω sin φ / k per swing. At Ω ≥ k that is up to half a turn or more per
+      swing, so there is no swing plane whose turning points the precession measurement could follow
+      (``bench.verdicts.turning_points``), and the terms of relative size (Ω/k)² that the planar models drop
+      (models/README.md "The three models") are of order one. Earth's Ω_E/k is 10⁻⁵-10⁻⁴ for real pendulums.
+    * **The bob stays below the pivot's height.** The spherical model's coordinates end there (z = −√(L² − x²
+      − y²), ``models.spherical``), a string can go slack above it, and the planar models approximate the
+      spherical one. The spherical model conserves its Jacobi integral h = ½|ṙ|² + g z − (c/2)|ω×r|² exactly;
+      at z = 0 (the pivot's height) h ≥ −(c/2)|ω|²L², since |ω×r| ≤ |ω| L. So a release with h₀ < −(c/2)|ω|²L²
+      can never reach that height: this is required of every release (from rest it holds unless Ω is near k
+      and the amplitude near L). For a release speed s along a direction û, h₀ = ½ s² q + h₀(s = 0) with
+      q = 1 + ((x₀û_x + y₀û_y)/z₀)² (ż₀ = −(x₀ẋ₀ + y₀ẏ₀)/z₀), which gives the largest speed in the message.
+    """
+    from foucault_bench.models.spherical import energy as jacobi_integral  # (m, x, y, vx, vy, parameters)
+
+    k = params.pendulum_frequency_rad_s
+    omega = params.earth_rate_rad_s
+    if omega >= k:
+        return [f"earth_rate_rad_s = {omega:.6g} rad/s must be below the pendulum's own frequency k = √(g/L) = "
+                f"{k:.6g} rad/s: at Ω ≥ k Earth turns the swing plane by up to half a turn or more per swing, so "
+                "there is no swing plane to follow and the models' neglected (Ω/k)² terms are of order one"]
+    x0, y0, vx, vy = (float(value) for value in params.initial_state())
+    vector = params.parameter_vector()
+    centrifugal = 1.0 if params.centrifugal else 0.0
+    least_at_pivot_height = -0.5 * centrifugal * omega**2 * params.length_m**2
+    at_rest = jacobi_integral(math, x0, y0, 0.0, 0.0, vector) - least_at_pivot_height
+    speed = math.hypot(vx, vy)
+    if speed == 0.0:
+        if at_rest < 0.0:
+            return []
+        return [f"released at amplitude_m = {short_repr(params.amplitude_m)} m with earth_rate_rad_s = {omega:.6g} rad/s "
+                f"(k = {k:.6g} rad/s) the bob can rise to the pivot's height even from rest, where the models end "
+                "(lower the amplitude or the rate)"]
+    z0 = -math.sqrt(params.length_m**2 - x0**2 - y0**2)
+    q = 1.0 + ((x0 * vx / speed + y0 * vy / speed) / z0) ** 2
+    largest = math.sqrt(-2.0 * at_rest / q) if at_rest < 0.0 else 0.0
+    if speed < largest:
+        return []
+    return [f"release_velocity_m_s = {short_repr(list(params.release_velocity_m_s))}: a release speed of "
+            f"{speed:.6g} m/s lifts the bob to the pivot's height, where the models end (the spherical model's "
+            f"Jacobi integral would exceed −(c/2)|ω|²L², its least value there); from this release point in this "
+            f"direction the speed must stay below {largest:.6g} m/s"]
+
+
 def grid_problems(period_s: float, duration_s: float, output_interval_s: float) -> list[str]:
     """What is wrong with a duration and output interval for a pendulum of small-swing period ``period_s``
     (empty list: nothing)."""
     problems: list[str] = []
     if not (finite_number(duration_s, positive=True)):
-        problems.append(f"duration_s must be a number of seconds > 0, got {duration_s!r}")
+        problems.append(f"duration_s must be a number of seconds > 0, got {short_repr(duration_s)}")
     if not (finite_number(output_interval_s, positive=True)):
-        problems.append(f"output_interval_s must be a number of seconds > 0, got {output_interval_s!r}")
+        problems.append(f"output_interval_s must be a number of seconds > 0, got {short_repr(output_interval_s)}")
     if problems:
         return problems
     period = period_s
@@ -177,10 +249,10 @@ def scene_from_mapping(name: str, mapping: Mapping[str, Any]) -> Scene:
     """
     problems: list[str] = []
     if not isinstance(mapping, Mapping):
-        raise InputError([f"a scene must be a table of fields, got {mapping!r}"])
+        raise InputError([f"a scene must be a table of fields, got {short_repr(mapping)}"])
     for key in mapping:
         if key not in SCENE_KEYS:
-            problems.append(f"unknown key {key!r}{suggestion(str(key), SCENE_KEYS)}; "
+            problems.append(f"unknown key {short_repr(key)}{suggestion(str(key), SCENE_KEYS)}; "
                             f"known keys: {', '.join(SCENE_KEYS)}")
     values: dict[str, Any] = {}
     base_name = mapping.get("base")
@@ -194,7 +266,7 @@ def scene_from_mapping(name: str, mapping: Mapping[str, Any]) -> Scene:
                                     f"for the changed fields): {base.why_model}",
                           assumptions=base.assumptions)
         else:
-            problems.append(f"base: unknown scene {base_name!r}{suggestion(str(base_name), SCENES)}; "
+            problems.append(f"base: unknown scene {short_repr(base_name)}{suggestion(str(base_name), SCENES)}; "
                             f"built-in scenes: {', '.join(SCENES)}")
     values.update({key: value for key, value in mapping.items() if key in SCENE_KEYS and key != "base"})
     if base_name is None:
@@ -245,28 +317,27 @@ def _field_problems(values: Mapping[str, Any]) -> list[str]:
             continue
         value = values[key]
         if not finite_number(value):
-            shown = repr(value) if len(repr(value)) <= 40 else f"{repr(value)[:20]}…({len(repr(value))} characters)"
-            problems.append(f"{key} must be a finite number ({unit}), got {shown}")
+            problems.append(f"{key} must be a finite number ({unit}), got {short_repr(value)}")
         elif not in_range(value):
-            problems.append(f"{key} must be {condition} ({unit}), got {value!r}")
+            problems.append(f"{key} must be {condition} ({unit}), got {short_repr(value)}")
     length, amplitude = values.get("length_m"), values.get("amplitude_m")
     if is_number(length) and is_number(amplitude) and length > 0 and amplitude >= length:
-        problems.append(f"amplitude_m = {amplitude!r} m must be less than length_m = {length!r} m "
+        problems.append(f"amplitude_m = {short_repr(amplitude)} m must be less than length_m = {short_repr(length)} m "
                         "(the release point lies on the sphere of radius L, below the pivot)")
     velocity = values.get("release_velocity_m_s")
     if velocity is not None and not (
         isinstance(velocity, (list, tuple)) and len(velocity) == 2
         and all(finite_number(v) for v in velocity)
     ):
-        problems.append(f"release_velocity_m_s must be a pair [vx, vy] of finite numbers (m/s), got {velocity!r}")
+        problems.append(f"release_velocity_m_s must be a pair [vx, vy] of finite numbers (m/s), got {short_repr(velocity)}")
     if "centrifugal" in values and not isinstance(values["centrifugal"], bool):
-        problems.append(f"centrifugal must be true or false, got {values['centrifugal']!r}")
+        problems.append(f"centrifugal must be true or false, got {short_repr(values['centrifugal'])}")
     if "model" in values and values["model"] not in MODELS:
-        problems.append(f"model: unknown model {values['model']!r}{suggestion(str(values['model']), MODELS)}; "
+        problems.append(f"model: unknown model {short_repr(values['model'])}{suggestion(str(values['model']), MODELS)}; "
                         f"known models: {', '.join(MODELS)}")
     for key in TEXT_KEYS:
         if key in values and not isinstance(values[key], str):
-            problems.append(f"{key} must be a string, got {values[key]!r}")
+            problems.append(f"{key} must be a string, got {short_repr(values[key])}")
     length, gravity = values.get("length_m"), values.get("gravity_m_s2", STANDARD_GRAVITY_M_S2)
     grid_keys_ok = not any(message.startswith(("duration_s", "output_interval_s", "length_m", "gravity_m_s2"))
                            for message in problems)

@@ -30,8 +30,12 @@ it (never lengthens it) to fit a whole number of steps in each output interval (
 ``load_matrix`` refuses a bad file before anything runs and reports every problem at once
 (``bench.errors.InputError``), with a suggestion for misspelt names. Validation takes time linear in the
 file's size. Settings whose work is absurd are refused with the estimate: more than ``MAX_STEPS`` fixed steps
-(duration·k/kh) in a run, more than ``MAX_OUTPUT_POINTS`` points on a scene's output grid, or a tolerance
-below the double-precision unit roundoff (no double-precision integrator can meet it).
+(duration·k/kh) in a run, more than ``MAX_OUTPUT_POINTS`` points on a scene's output grid, a tolerance below the
+double-precision unit roundoff (no double-precision integrator can meet it; ``bench.validation``), or more than
+``MAX_RUNS`` runs in the matrix (counted from the lists' lengths before their entries are checked). Variants of a
+scene made by ``release_azimuth_deg`` are named with ``azimuth_label``, which keeps distinct azimuths distinct;
+no two scenes of a matrix may share a name, and none may have more than ``MAX_SCENE_NAME_LENGTH`` characters
+(``bench.problems.scenes``: what a report's file names fit).
 
 Plug-ins (``plugins``) are Python modules: importing one runs its code. They are imported only once the rest
 of the matrix is valid, and each must register at least one integrator.
@@ -51,11 +55,14 @@ from typing import Any
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR, physics_identity
-from foucault_bench.bench.problems.scenes import SCENES, Scene, scene_from_mapping
+from foucault_bench.bench.problems.scenes import SCENES, Scene, scene_from_mapping, scene_name_problem
 from foucault_bench.bench.run.provenance import code_version, digest
 from foucault_bench.bench.run.timing import TimingPolicy
 from foucault_bench.bench.schema import declared_facts, setting_label
-from foucault_bench.bench.validation import built_in_names, is_number, read_toml, suggestion
+from foucault_bench.bench.validation import (
+    built_in_names, coarse_steps_problem, is_number, read_toml, run_timeout_problem, setting_problem, short_list,
+    short_repr, step_count_problem, suggestion,
+)
 
 TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "release_azimuth_deg", "integrators", "kh", "tol",
                   "override", "plugins", "timing")
@@ -65,12 +72,13 @@ TIMING_KEYS = (*(field.name for field in dataclasses.fields(TimingPolicy)), RUN_
 DEFAULT_RUN_TIMEOUT_S = 600.0
 """Per-run time limit (s) when neither the matrix nor --run-timeout gives one: well above the slowest run of
 the built-in matrices (bench/README.md, "Nothing is lost", has the measurement)."""
-MAX_STEPS = 1e10
-"""More fixed steps than this in one run is refused (about an hour per run even at 3 ns a step)."""
 MAX_OUTPUT_POINTS = 10**7
 """More output points per scene than this is refused (each solution holds 4 doubles per point: 320 MB)."""
-UNIT_ROUNDOFF = 2.0**-53
-"""Double-precision unit roundoff u = 2⁻⁵³ (Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed., §2.1)."""
+MAX_RUNS = 100_000
+"""Most runs one matrix may expand to (scenes × settings, summed over its integrators). The default matrix's
+1323 runs take about 5 minutes on 2 cores (bench/README.md "Benchmark matrices"), so this is some 6 hours of
+2 cores at the same mix, and its validation about a second; a larger study is several matrices (or runs of one
+matrix with ``--resume``) rather than one file whose every run is planned in memory before the first starts."""
 BUILT_IN_FOLDER = "matrices"
 """Package folder of the built-in matrices (``bench/matrices/NAME.toml``, package data)."""
 
@@ -159,13 +167,13 @@ def _plugin_problems(plugins: list[str]) -> list[str]:
         try:
             importlib.import_module(module_name)
         except BaseException as error:  # noqa: BLE001 - a plug-in's failure (even sys.exit) is a problem to report
-            problems.append(f"plugins: cannot import {module_name!r}: {type(error).__name__}: {error}")
+            problems.append(f"plugins: cannot import {short_repr(module_name)}: {type(error).__name__}: {error}")
             continue
         own = [name for name, integrator in REGISTRY.items()
                if getattr(integrator, "__module__", "") == module_name
                or getattr(integrator, "__module__", "").startswith(f"{module_name}.")]
         if not own:
-            problems.append(f"plugins: {module_name!r} registers no integrator (a plug-in module must "
+            problems.append(f"plugins: {short_repr(module_name)} registers no integrator (a plug-in module must "
                             "register at least one with integrators.register)")
     return problems
 
@@ -195,17 +203,18 @@ def _validate(document: dict[str, Any], source: str, default_name: str, known_la
 
     for key in document:
         if key not in TOP_LEVEL_KEYS:
-            problem(f"unknown key {key!r}{suggestion(key, TOP_LEVEL_KEYS)}; allowed keys: {', '.join(TOP_LEVEL_KEYS)}")
+            problem(f"unknown key {short_repr(key)}{suggestion(key, TOP_LEVEL_KEYS)}; allowed keys: {', '.join(TOP_LEVEL_KEYS)}")
 
     name = document.get("name", default_name)
     if not isinstance(name, str) or not name:
-        problem(f"name must be a non-empty string, got {name!r}")
+        problem(f"name must be a non-empty string, got {short_repr(name)}")
     description = document.get("description", "")
     if not isinstance(description, str):
-        problem(f"description must be a string, got {description!r}")
+        problem(f"description must be a string, got {short_repr(description)}")
 
     plugins = _string_list(document, "plugins", problem, required=False)
     scenes = _release_azimuth_variants(_scenes(document, problem), document.get("release_azimuth_deg"), problem)
+    _check_names(scenes, problem)
     timing, run_timeout_s = _timing(document.get("timing", {}), problem)
     runs = _runs(document, scenes, plugins, timing, problem, known_later)
     if problems:
@@ -231,11 +240,11 @@ def _string_list(document: dict[str, Any], key: str, problem, *, required: bool)
         return []
     value = document[key]
     if not isinstance(value, list) or not all(isinstance(item, str) for item in value):
-        problem(f"{key} must be a list of strings, got {value!r}")
+        problem(f"{key} must be a list of strings, got {short_repr(value)}")
         return []
     duplicates = sorted(item for item, count in Counter(value).items() if count > 1)
     if duplicates:
-        problem(f"{key}: listed more than once: {', '.join(duplicates)}")
+        problem(f"{key}: listed more than once: {short_list(short_repr(item) for item in duplicates)}")
     return list(dict.fromkeys(value))
 
 
@@ -245,72 +254,94 @@ def _scenes(document: dict[str, Any], problem) -> list[Scene]:
         if name in SCENES:
             scenes.append(SCENES[name])
         else:
-            problem(f"scenes: unknown scene {name!r}{suggestion(name, SCENES)}; built-in scenes: {', '.join(SCENES)}")
+            problem(f"scenes: unknown scene {short_repr(name)}{suggestion(name, SCENES)}; built-in scenes: {', '.join(SCENES)}")
     inline = document.get("scene", {})
     if not isinstance(inline, dict):
-        problem(f"scene must be a table of inline scenes ([scene.NAME]), got {inline!r}")
+        problem(f"scene must be a table of inline scenes ([scene.NAME]), got {short_repr(inline)}")
         inline = {}
     for name, mapping in inline.items():
+        where = f"scene.{name}" if scene_name_problem(name) is None else f"scene.{short_repr(name)}"  # one line
         if name in SCENES:
-            problem(f"scene.{name}: the name {name!r} is taken by a built-in scene; choose another name")
+            problem(f"{where}: the name {short_repr(name)} is taken by a built-in scene; choose another name")
             continue
         if not isinstance(mapping, dict):
-            problem(f"scene.{name} must be a table of scene fields, got {mapping!r}")
+            problem(f"{where} must be a table of scene fields, got {short_repr(mapping)}")
             continue
         try:
             scenes.append(scene_from_mapping(name, mapping))
         except InputError as error:
             for message in error.problems:
-                problem(f"scene.{name}: {message}")
+                problem(f"{where}: {message}")
     if not document.get("scenes") and not inline:
         problem("no scenes: list built-in ones in scenes = [...] or define [scene.NAME] tables")
     return scenes
 
 
-def run_timeout_problem(value: Any, where: str) -> str | None:
-    """Why ``value`` is not a usable per-run time limit (a finite number of seconds > 0), or ``None``."""
-    if not is_number(value) or not math.isfinite(value) or value <= 0:
-        return f"{where} must be a finite number of seconds > 0, got {_short(value)}"
-    return None
-
-
-def _short(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else f"{text[:20]}…({len(text)} characters)"
+def azimuth_label(azimuth_deg: float) -> str:
+    """The azimuth as it appears in a variant's name: the shortest text that reads back as the same float
+    (``repr``), with a whole number's ``.0`` and an exponent's ``+`` dropped (``45``, ``45.0000001``, ``1e20``,
+    ``1e-05``). Distinct floats get distinct labels (``repr`` round-trips, and neither dropped piece can be
+    confused with another float's text), unlike ``:g``, which keeps 6 digits: 45 and 45.0000001 were both
+    ``45``."""
+    return repr(float(azimuth_deg)).removesuffix(".0").replace("e+", "e")
 
 
 def _release_azimuth_variants(scenes: list[Scene], azimuths: Any, problem) -> list[Scene]:
     """With ``release_azimuth_deg = [ψ₁, ψ₂, …]``, every scene once per release azimuth (degrees from x = South
-    towards y = East), named ``SCENE-azψ``; without it, the scenes as they are."""
+    towards y = East), named ``SCENE-azψ`` (ψ by ``azimuth_label``); without it, the scenes as they are."""
     if azimuths is None:
         return scenes
     if (not isinstance(azimuths, list) or not azimuths
             or not all(is_number(value) and math.isfinite(value) for value in azimuths)):
-        problem(f"release_azimuth_deg must be a non-empty list of finite numbers (degrees), got {azimuths!r}")
+        problem(f"release_azimuth_deg must be a non-empty list of finite numbers (degrees), got {short_repr(azimuths)}")
         return scenes
     if len(set(azimuths)) != len(azimuths):
         problem("release_azimuth_deg: an azimuth is listed more than once")
-    return [
-        dataclasses.replace(
-            scene, name=f"{scene.name}-az{azimuth:g}", title=f"{scene.title}, released at azimuth {azimuth:g}°",
-            params=dataclasses.replace(scene.params, release_azimuth_deg=float(azimuth)),
-            assumptions=f"{scene.assumptions} Release azimuth swept by the matrix: {azimuth:g}° from South "
-                        "towards East.".strip(),
-        )
-        for scene in scenes for azimuth in azimuths
-    ]
+        azimuths = list(dict.fromkeys(azimuths))  # one variant each: no second problem for the same name
+    if len(scenes) * len(azimuths) > MAX_RUNS:
+        problem(f"release_azimuth_deg: {len(scenes)} scene(s) × {len(azimuths)} azimuths make more than the "
+                f"{MAX_RUNS} runs a matrix may have")
+        return scenes
+    variants = []
+    for scene in scenes:
+        for azimuth in azimuths:
+            label = azimuth_label(azimuth)
+            try:
+                variants.append(dataclasses.replace(
+                    scene, name=f"{scene.name}-az{label}", title=f"{scene.title}, released at azimuth {label}°",
+                    params=dataclasses.replace(scene.params, release_azimuth_deg=float(azimuth)),
+                    assumptions=f"{scene.assumptions} Release azimuth swept by the matrix: {label}° from South "
+                                "towards East.".strip(),
+                ))
+            except InputError as error:  # the physical limits depend on the release azimuth
+                for message in error.problems:
+                    problem(f"release_azimuth_deg = {label} of scene {short_repr(scene.name)}: {message}")
+    return variants
+
+
+def _check_names(scenes: list[Scene], problem) -> None:
+    """Every scene of a matrix has a name of at most ``MAX_SCENE_NAME_LENGTH`` characters, which every file
+    name a report derives from it fits (``bench.problems.scenes``), and a name of its own: rows, references and
+    report files are keyed by it."""
+    for name, count in Counter(scene.name for scene in scenes).items():
+        message = scene_name_problem(name)
+        if message:
+            problem(message)
+        if count > 1:
+            problem(f"{count} scenes are named {short_repr(name)} (rows and report files are keyed by the scene name): "
+                    "rename the inline scene or change the azimuth")
 
 
 def _timing(table: Any, problem) -> tuple[TimingPolicy, float]:
     if not isinstance(table, dict):
-        problem(f"timing must be a table, got {table!r}")
+        problem(f"timing must be a table, got {short_repr(table)}")
         return TimingPolicy(), DEFAULT_RUN_TIMEOUT_S
     values: dict[str, Any] = {}
     defaults = TimingPolicy()
     run_timeout_s = DEFAULT_RUN_TIMEOUT_S
     for key, value in table.items():
         if key not in TIMING_KEYS:
-            problem(f"timing: unknown key {key!r}{suggestion(key, TIMING_KEYS)}; allowed keys: {', '.join(TIMING_KEYS)}")
+            problem(f"timing: unknown key {short_repr(key)}{suggestion(key, TIMING_KEYS)}; allowed keys: {', '.join(TIMING_KEYS)}")
             continue
         if key == RUN_TIMEOUT_KEY:
             message = run_timeout_problem(value, f"timing: {key}")
@@ -321,10 +352,10 @@ def _timing(table: Any, problem) -> tuple[TimingPolicy, float]:
             continue
         wanted = type(getattr(defaults, key))
         if not is_number(value) or (wanted is int and not isinstance(value, int)):
-            problem(f"timing: {key} must be {'an integer' if wanted is int else 'a number'}, got {_short(value)}")
+            problem(f"timing: {key} must be {'an integer' if wanted is int else 'a number'}, got {short_repr(value)}")
             continue
         if wanted is float and not math.isfinite(value):
-            problem(f"timing: {key} must be finite, got {value!r}")
+            problem(f"timing: {key} must be finite, got {short_repr(value)}")
             continue
         values[key] = wanted(value)
     policy = TimingPolicy(**values)
@@ -334,27 +365,27 @@ def _timing(table: Any, problem) -> tuple[TimingPolicy, float]:
 
 
 def _sweep(value: Any, key: str, where: str, problem) -> list[float]:
-    """A list of kh values (> 0, finite) or tolerances (in (0, 1)); one problem per bad entry."""
+    """A list of kh values (> 0, finite) or tolerances (in (0, 1), at least 2⁻⁵³; ``bench.validation.
+    setting_problem``); one problem per bad entry. A list longer than ``MAX_RUNS`` is refused without looking at
+    its entries: no matrix could run it."""
     if not isinstance(value, list) or not value:
-        problem(f"{where}: {key} must be a non-empty list of numbers, got {value!r}")
+        problem(f"{where}: {key} must be a non-empty list of numbers, got {short_repr(value)}")
+        return []
+    if len(value) > MAX_RUNS:
+        problem(f"{where}: {key} lists {len(value)} values, more than the {MAX_RUNS} runs a matrix may have")
         return []
     accepted: list[float] = []
     for item in value:
-        if not is_number(item):
-            problem(f"{where}: {key} entries must be numbers a float can hold, got {_short(item)}")
-        elif key == "kh" and not (math.isfinite(item) and item > 0):
-            problem(f"{where}: step size must be > 0: kh = {item!r} (kh = k·h, the step in units of 1/k)")
-        elif key == "tol" and not 0.0 < item < 1.0:
-            problem(f"{where}: tolerance must lie in (0, 1): tol = {item!r}")
-        elif key == "tol" and item < UNIT_ROUNDOFF:
-            problem(f"{where}: tol = {item!r} is below the double-precision unit roundoff 2^-53 ≈ 1.1e-16: "
-                    "no double-precision integrator can meet it")
+        message = setting_problem(key, item)
+        if message:
+            problem(f"{where}: {message}")
         else:
             accepted.append(float(item))
-    duplicates = sorted(item for item, count in Counter(accepted).items() if count > 1)
-    if duplicates:
-        problem(f"{where}: {key} lists {', '.join(f'{item:g}' for item in duplicates)} more than once")
-    return list(dict.fromkeys(accepted))
+    unique = list(dict.fromkeys(accepted))
+    if len(unique) < len(accepted):
+        duplicates = sorted(item for item, count in Counter(accepted).items() if count > 1)
+        problem(f"{where}: {key} lists {short_list(f'{item:g}' for item in duplicates)} more than once")
+    return unique
 
 
 def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timing: TimingPolicy,
@@ -371,28 +402,33 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
         elif name not in REGISTRY and known_later:
             continue
         elif name not in REGISTRY:
-            problem(f"integrators: unknown integrator {name!r}{suggestion(name, REGISTRY)}; "
+            problem(f"integrators: unknown integrator {short_repr(name)}{suggestion(name, REGISTRY)}; "
                     f"known integrators: {', '.join(sorted(set(REGISTRY) - {REFERENCE_INTEGRATOR}))}")
         else:
             integrators.append(REGISTRY[name])
+    planned = _planned_runs(document, integrators, len(scenes))
+    if planned > MAX_RUNS:
+        problem(f"the matrix expands to {planned} runs (scenes × settings, summed over the integrators), more than "
+                f"the {MAX_RUNS} a matrix may have: split it into several matrices")
+        return []
     shared = {key: _sweep(document[key], key, key, problem) for key in SETTING_KEYS if key in document}
 
     overrides = document.get("override", {})
     if not isinstance(overrides, dict):
-        problem(f"override must be a table of per-integrator tables ([override.NAME]), got {overrides!r}")
+        problem(f"override must be a table of per-integrator tables ([override.NAME]), got {short_repr(overrides)}")
         overrides = {}
     own: dict[str, dict[str, list[float]]] = {}
     for name, table in overrides.items():
         where = f"override.{name}"
         if name not in names:
-            problem(f"{where}: {name!r} is not listed in integrators{suggestion(name, names)}")
+            problem(f"{where}: {short_repr(name)} is not listed in integrators{suggestion(name, names)}")
             continue
         if not isinstance(table, dict):
-            problem(f"{where} must be a table with kh or tol, got {table!r}")
+            problem(f"{where} must be a table with kh or tol, got {short_repr(table)}")
             continue
         for key, value in table.items():
             if key not in SETTING_KEYS:
-                problem(f"{where}: unknown key {key!r}{suggestion(key, SETTING_KEYS)}; allowed keys: kh, tol")
+                problem(f"{where}: unknown key {short_repr(key)}{suggestion(key, SETTING_KEYS)}; allowed keys: kh, tol")
             else:
                 own.setdefault(name, {})[key] = _sweep(value, key, where, problem)
 
@@ -401,7 +437,7 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
         _check_work(sweeps.get("kh", []), where, scenes, problem)
     for scene in scenes:
         if scene.n_intervals + 1 > MAX_OUTPUT_POINTS:
-            problem(f"scene {scene.name!r}: its output grid has {scene.n_intervals + 1:.3g} points, more than "
+            problem(f"scene {short_repr(scene.name)}: its output grid has {scene.n_intervals + 1:.3g} points, more than "
                     f"{MAX_OUTPUT_POINTS:.0e} (duration_s / output_interval_s): raise output_interval_s")
 
     used = set()
@@ -410,7 +446,7 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
         return runs
     code = code_version(tuple(plugins))
     for integrator in integrators:
-        right, wrong = ("tol", "kh") if integrator.adaptive else ("kh", "tol")
+        right, wrong = _setting_keys(integrator)
         kind = "adaptive (give tol)" if integrator.adaptive else "a fixed-step method (give kh)"
         if wrong in own.get(integrator.name, {}):
             problem(f"override.{integrator.name}: {integrator.name} is {kind}; {wrong} does not apply to it")
@@ -422,6 +458,7 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
             problem(f"integrators: {integrator.name} is {kind} but no {right} sweep is given "
                     f"(add {right} = [...] or [override.{integrator.name}])")
             continue
+        declared = tuple(declared_facts(integrator).items())  # once per integrator: the same for all its runs
         for scene in scenes:
             for value in sweep:
                 runs.append(RunSpec(
@@ -432,7 +469,7 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
                     plugins=tuple(plugins),
                     timing=timing,
                     code_version=code,
-                    declared=tuple(declared_facts(integrator).items()),
+                    declared=declared,
                 ))
     for key in shared:
         if key not in used and integrators:
@@ -442,22 +479,39 @@ def _runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], tim
     return runs
 
 
+def _setting_keys(integrator: Any) -> tuple[str, str]:
+    """(the setting key the integrator takes, the one it does not): tol for an adaptive one, kh otherwise."""
+    return ("tol", "kh") if integrator.adaptive else ("kh", "tol")
+
+
+def _planned_runs(document: dict[str, Any], integrators: list[Any], scene_count: int) -> int:
+    """How many runs the matrix would expand to, counted from the lengths of its lists before any entry is
+    validated (so that an oversized matrix is refused at once): per integrator, its own sweep or the shared
+    one, times the scenes."""
+    overrides = document.get("override")
+    total = 0
+    for integrator in integrators:
+        right, _ = _setting_keys(integrator)
+        table = overrides.get(integrator.name) if isinstance(overrides, dict) else None
+        sweep = table.get(right) if isinstance(table, dict) and right in table else document.get(right)
+        total += len(sweep) if isinstance(sweep, list) else 0
+    return total * scene_count
+
+
 def _check_steps_fit(kh_values: list[float], where: str, scenes: list[Scene], problem) -> None:
     """A fixed step is at most one output interval Δ (``integrators.fixed_step``): kh ≤ k·Δ in every scene."""
     for scene in scenes:
-        largest = scene.params.pendulum_frequency_rad_s * scene.output_interval_s
-        too_coarse = [value for value in kh_values if value > largest * (1.0 + 1e-12)]
-        if too_coarse:
-            problem(f"{where}: kh = {', '.join(f'{value:g}' for value in too_coarse)} exceeds what scene "
-                    f"{scene.name!r} allows: a step is at most one output interval, kh <= k·Δ = {largest:.4g}")
+        message = coarse_steps_problem(kh_values, scene.params.pendulum_frequency_rad_s, scene.output_interval_s,
+                                       f"scene {short_repr(scene.name)}")
+        if message:
+            problem(f"{where}: {message}")
 
 
 def _check_work(kh_values: list[float], where: str, scenes: list[Scene], problem) -> None:
     """Refuse a fixed step that needs more than ``MAX_STEPS`` steps: duration·k/kh in a scene."""
     for scene in scenes:
-        k = scene.params.pendulum_frequency_rad_s
         for value in kh_values:
-            steps = scene.duration_s * k / value
-            if steps > MAX_STEPS:
-                problem(f"{where}: kh = {value:g} needs about {steps:.2g} steps in scene {scene.name!r} "
-                        f"(duration {scene.duration_s:g} s · k {k:.4g} rad/s / kh), more than {MAX_STEPS:.0e}")
+            message = step_count_problem(value, scene.params.pendulum_frequency_rad_s, scene.duration_s,
+                                         f"scene {short_repr(scene.name)}")
+            if message:
+                problem(f"{where}: {message}")
