@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 
 from foucault_bench.bench.cli import main as cli_main
+from foucault_bench.bench.problems.scene_key import scene_key
 from foucault_bench.bench.run.matrix import parse_matrix
 from foucault_bench.bench.schema import COLUMN_NAMES
 from foucault_bench.bench.run.store import ResultsStore, compare_runs, summarize
@@ -21,7 +22,8 @@ MATRIX = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4", "cvode_bd
 def fake_row(run, matrix_id: str, index: int) -> dict:
     """A complete row with distinct, awkward values (NaN, tiny and huge floats) for round-trip checks."""
     row = dict.fromkeys(COLUMN_NAMES)
-    row.update(run_key=run.run_key, matrix_id=matrix_id, scene=run.scene.name, model=run.scene.model,
+    row.update(run_key=run.run_key, matrix_id=matrix_id, scene=run.scene.name, scene_key=scene_key(run.scene),
+               model=run.scene.model,
                integrator=run.integrator, family="test", kh=run.kh, tol=run.tol, step_s=run.step_s, status="ok",
                message="", duration_s=run.scene.duration_s, n_out=61 + index, energy_conserved=1,
                energy_max_rel_error=np.float64(1.0 / 3.0 + index), energy_drift_per_s=-2.5e-300,
@@ -115,7 +117,9 @@ def test_compare_finds_a_one_ulp_difference_and_reports_cost_ratios(filled):
     assert mismatches["run"].iloc[0] == f"seed_2min rk4 kh={rows[1]['kh']!r}"
     assert np.allclose(costs["wall_time_s_ratio_b_over_a"], 2.0)
     mismatches, costs, unmatched = compare_runs(frame, frame.iloc[1:])
-    assert unmatched == [f"seed_2min rk4 kh={rows[0]['kh']!r}"]
+    assert unmatched == [("A", f"seed_2min rk4 kh={rows[0]['kh']!r}")]
+    mismatches, costs, unmatched = compare_runs(frame.iloc[1:], frame)
+    assert unmatched == [("B", f"seed_2min rk4 kh={rows[0]['kh']!r}")]
 
 
 def test_summary_has_one_line_per_scene_and_integrator_with_the_best_error(filled):
