@@ -1,7 +1,8 @@
 """The ``foucault-bench`` command line: one sub-command per module of ``bench.commands``, imported only when used.
 
 Each command module provides ``add_arguments(parser)`` and ``main(args) -> int`` (``bench.commands``). Bad input
-raises ``bench.errors.InputError``, which is printed as one line per problem with exit status 2 and no traceback.
+raises ``bench.errors.InputError``, which is printed as one line per problem with exit status 2 and no traceback;
+so is an SQLite error (a damaged database; the results store turns its own into ``InputError`` naming the file).
 A matrix run stopped by its Dask cluster (``bench.errors.RunInterrupted``) exits with 75, SIGINT with 130,
 SIGTERM during a matrix run with 143, and a closed output pipe ends quietly with 141 (128 + SIGPIPE).
 """
@@ -15,7 +16,7 @@ import signal
 import sys
 
 from foucault_bench.bench.commands import COMMANDS
-from foucault_bench.bench.errors import InputError, RunInterrupted
+from foucault_bench.bench.errors import InputError, RunInterrupted, database_error_types
 
 
 def _module(name: str):
@@ -33,6 +34,11 @@ def main(argv: list[str] | None = None) -> int:
     except InputError as error:
         for problem in error.problems:
             print(f"foucault-bench {args.command}: error: {problem}", file=sys.stderr)
+        return 2
+    except database_error_types() as error:  # an SQLite error outside the results store's own reads and writes
+        cause = error.__cause__ if error.__cause__ is not None else error
+        print(f"foucault-bench {args.command}: error: SQLite: {str(cause).splitlines()[0] if str(cause) else type(cause).__name__}",
+              file=sys.stderr)
         return 2
     except RunInterrupted as error:
         print(f"foucault-bench {args.command}: interrupted: {error}", file=sys.stderr)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import sqlite3
+import sys
+
 
 class InputError(Exception):
     """Bad user input (matrix, thresholds, arguments): one message per problem, nothing has run yet."""
@@ -17,6 +20,15 @@ class RunInterrupted(Exception):
     sysexits.h: a temporary failure, try again)."""
 
     exit_status = 75
+def database_error_types() -> tuple[type[BaseException], ...]:
+    """The errors of reading or writing an SQLite file: ``sqlite3.DatabaseError`` (a damaged file, a full disk,
+    a locked or read-only database), and pandas' ``DatabaseError``, which ``read_sql_query`` raises from one,
+    once pandas is loaded (nothing here imports it)."""
+    pandas_errors = sys.modules.get("pandas.errors")
+    pandas_error = getattr(pandas_errors, "DatabaseError", None)
+    return (sqlite3.DatabaseError,) + ((pandas_error,) if pandas_error is not None else ())
+
+
 def require_extra(module: str, extra: str, feature: str) -> None:
     """Raise ``InputError`` naming the package extra that provides ``module`` when it is not installed, e.g.
     ``--scheduler needs the 'dask' extra: pip install 'foucault-bench[dask]'``."""

@@ -28,13 +28,12 @@ import json
 import os
 import re
 import sqlite3
-import sys
 import uuid
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Mapping, TypeVar
 
-from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.errors import InputError, database_error_types
 from foucault_bench.bench.problems.scene_key import UNKNOWN_PHYSICS, label_map, scene_labels
 from foucault_bench.bench.run.lock import MatrixRunLock, MatrixRunLocked
 from foucault_bench.bench.schema import (
@@ -103,14 +102,6 @@ def _plain(value: Any) -> Any:
 DAMAGED_CODES = (sqlite3.SQLITE_CORRUPT, sqlite3.SQLITE_NOTADB)
 """SQLite result codes of a damaged file (sqlite.org/rescode.html: SQLITE_CORRUPT "database disk image is
 malformed", SQLITE_NOTADB "file is not a database")."""
-
-
-def _database_error_types() -> tuple[type[BaseException], ...]:
-    """``sqlite3.DatabaseError``, and pandas' ``DatabaseError`` (which ``read_sql_query`` raises from one) once
-    pandas is loaded: the store imports pandas only to build frames."""
-    pandas_errors = sys.modules.get("pandas.errors")
-    pandas_error = getattr(pandas_errors, "DatabaseError", None)
-    return (sqlite3.DatabaseError,) + ((pandas_error,) if pandas_error is not None else ())
 
 
 def _guarded(method: Callable[..., Result]) -> Callable[..., Result]:
@@ -246,7 +237,7 @@ class ResultsStore:
         naming the file."""
         try:
             yield
-        except _database_error_types() as error:
+        except database_error_types() as error:
             cause = error.__cause__ if isinstance(error.__cause__, sqlite3.DatabaseError) else error
             if not isinstance(cause, sqlite3.DatabaseError):
                 raise
