@@ -75,6 +75,7 @@ def _compare(store, first: str, second: str) -> int:
         print(f"note: {reason}")
     if costs.empty:
         print("nothing to compare: the two matrix runs share no run")
+        print(unmatched_text(unmatched, frame_a, frame_b, set(differing)))
         return 1
     print(cost_ratio_text(costs))
     if mismatches.empty:
