@@ -32,7 +32,7 @@ SCENE_KEY_HEX_DIGITS = 16
 """Length of a stored key (64 bits: a collision among a million scenes has odds about 3e-8)."""
 LABEL_HEX_DIGITS = 6
 """Digits of the key shown in a label when one name has several physics."""
-UNKNOWN_PHYSICS = "unknown physics"
+UNKNOWN_KEY_LABEL = "unknown physics"
 """Label part of rows whose physics is not known (``scene_key`` NULL: rows of an older database)."""
 
 
@@ -94,7 +94,7 @@ def label_map(pairs: Iterable[tuple[str, Any]]) -> dict[tuple[str, str | None], 
     for name, found in keys.items():
         digits = _distinguishing_digits({key for key in found if key is not None})
         for key in found:
-            labels[name, key] = name if len(found) == 1 else f"{name} [{UNKNOWN_PHYSICS if key is None else key[:digits]}]"
+            labels[name, key] = name if len(found) == 1 else f"{name} [{UNKNOWN_KEY_LABEL if key is None else key[:digits]}]"
     return labels
 
 

@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Mapping, TypeVar
 
 from foucault_bench.bench.errors import InputError, database_error_types
-from foucault_bench.bench.problems.scene_key import UNKNOWN_PHYSICS, label_map, scene_labels
+from foucault_bench.bench.problems.scene_key import UNKNOWN_KEY_LABEL, label_map, scene_labels
 from foucault_bench.bench.run.lock import MatrixRunLock, MatrixRunLocked
 from foucault_bench.bench.schema import (
     COLUMN_NAMES, COLUMNS, MIGRATIONS, RUN_STATUSES, SCHEMA_VERSION, VERDICT_COLUMNS, is_present, setting_label,
@@ -687,7 +687,7 @@ def scene_differences(frame_a: pd.DataFrame, frame_b: pd.DataFrame) -> dict[str,
         found: dict[str, set[str]] = {}
         column = frame["scene_key"] if "scene_key" in frame.columns else [None] * len(frame)
         for name, key in zip(frame["scene"], column, strict=True):
-            found.setdefault(str(name), set()).add(key if isinstance(key, str) else UNKNOWN_PHYSICS)
+            found.setdefault(str(name), set()).add(key if isinstance(key, str) else UNKNOWN_KEY_LABEL)
         return found
 
     in_a, in_b = keys(frame_a), keys(frame_b)
