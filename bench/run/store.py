@@ -350,7 +350,7 @@ class ResultsStore:
                 scene = SCENES[base]
                 return dataclasses.replace(scene, name=name, params=dataclasses.replace(
                     scene.params, release_azimuth_deg=float(azimuth)))
-            except (KeyError, ValueError):
+            except (KeyError, ValueError, InputError):  # not a built-in name, or not an azimuth after -az
                 return None
 
         rows = self.connection.execute(
