@@ -2,11 +2,12 @@
 
 The answer comes from the results store: among the stored runs of the scene (every matrix run; the rows of the
 scene's physics, ``bench.problems.scene_key``, whatever name they were stored under, so that a name reused with
-other physics is never mixed in; the latest row of each integrator and setting), the cheapest ok run whose error meets the target (``bench.verdicts.pareto``;
-cost = CPU time where stored, else wall time), its measured cost, the next two (the cheapest runs of two other
-integrators meeting it), and which model the scene needs at that accuracy (from the model-adequacy rows the
-runner stores for the scene's physics: what a simpler model gets wrong, or what the scene's model leaves out,
-compared with the target). Its cost counts are RHS evaluations, or Taylor steps for the taylor family.
+other physics is never mixed in; the latest row of each integrator and setting), the cheapest ok run whose error
+meets the target (``bench.verdicts.pareto``; cost = CPU time where stored, else wall time), its measured cost,
+the next two (the cheapest runs of two other integrators meeting it), and which model the scene needs at that
+accuracy (from the model-adequacy rows the runner stores for the scene's physics: what a simpler model gets
+wrong, or what the scene's model leaves out, compared with the target). Its cost counts are RHS evaluations, or
+Taylor steps for the taylor family.
 
 When no stored run meets the target, ``search`` runs a small targeted search and stores its runs like any
 matrix run (``bench.run.runner.run_matrix``, a matrix named ``advise-<scene>``): for each integrator of the
@@ -215,7 +216,9 @@ def model_advice(adequacy: pd.DataFrame, scene: Scene, target: Target) -> dict[s
                       else ("trajectory_gap", "A"))
     if adequacy.empty:
         return {"needed": scene.model, "text": "no model-adequacy rows stored for this scene"}
-    rows = adequacy[adequacy["scene_key"] == scene_key(scene)] if "scene_key" in adequacy.columns else adequacy.iloc[:0]
+    if "scene_key" not in adequacy.columns:  # rows of no known physics
+        return {"needed": scene.model, "text": "no model-adequacy rows stored for this scene's physics"}
+    rows = adequacy[adequacy["scene_key"] == scene_key(scene)]
     simpler = rows[rows["model"] == scene.model]  # what each simpler model gets wrong
     richer = rows[rows["simpler_model"] == scene.model]  # what the scene's model leaves out
     what = "precession rate" if quantity == "precession_rate_diff" else "trajectory"

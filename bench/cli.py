@@ -37,8 +37,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except database_error_types() as error:  # an SQLite error outside the results store's own reads and writes
         cause = error.__cause__ if error.__cause__ is not None else error
-        print(f"foucault-bench {args.command}: error: SQLite: {str(cause).splitlines()[0] if str(cause) else type(cause).__name__}",
-              file=sys.stderr)
+        text = str(cause).splitlines()[0] if str(cause) else type(cause).__name__
+        print(f"foucault-bench {args.command}: error: SQLite: {text}", file=sys.stderr)
         return 2
     except RunInterrupted as error:
         print(f"foucault-bench {args.command}: interrupted: {error}", file=sys.stderr)

@@ -8,7 +8,6 @@ import hashlib
 import json
 
 import pandas as pd
-import pytest
 
 from foucault_bench.bench.problems.scene_key import SCENE_KEY_HEX_DIGITS, scene_key, scene_labels
 from foucault_bench.bench.problems.scenes import SCENES, scene_from_mapping

@@ -280,10 +280,11 @@ def test_a_version_2_database_gets_the_scene_keys_its_run_keys_prove(tmp_path):
     for run in runs:
         proved = run.scene.name.startswith("seed_2min-az")  # built-in physics (with its azimuth variants)
         expected[run.run_key] = scene_key(run.scene) if proved else None
-    got = {key: (value if isinstance(value, str) else None) for key, value in zip(rows["run_key"], rows["scene_key"])}
+    got = {key: (value if isinstance(value, str) else None)
+           for key, value in zip(rows["run_key"], rows["scene_key"], strict=True)}
     assert got == expected
     assert sum(value is not None for value in got.values()) == 4  # seed_2min-az90 and -az45, 2 runs each
-    by_scene = dict(zip(adequacy["scene"], adequacy["scene_key"]))
+    by_scene = dict(zip(adequacy["scene"], adequacy["scene_key"], strict=True))
     assert by_scene["seed_2min-az45"] == scene_key(matrix.scenes[1]) and pd.isna(by_scene["inline-az45"])
     assert set(scene_labels(rows)) == {"seed_2min-az90", "seed_2min-az45", "inline-az90", "inline-az45",
                                        "pantheon"}  # one physics (known or not) per name: plain names

@@ -66,8 +66,8 @@ def _compare(store, first: str, second: str) -> int:
     frame_a, frame_b = store.frame(id_a), store.frame(id_b)
     mismatches, costs, unmatched = compare_runs(frame_a, frame_b)
     code = store.matrix_runs().set_index("matrix_id")["code_version"]
-    print(f"A = {id_a}, B = {id_b}: {len(costs)} runs in both, "
-          f"{sum(side == 'A' for side, _ in unmatched)} only in A, {sum(side == 'B' for side, _ in unmatched)} only in B")
+    only = {side: sum(other == side for other, _ in unmatched) for side in "AB"}
+    print(f"A = {id_a}, B = {id_b}: {len(costs)} runs in both, {only['A']} only in A, {only['B']} only in B")
     if code[id_a] != code[id_b]:
         print(f"note: different code versions (A {code[id_a]}, B {code[id_b]}): differences may be real changes")
     differing = scene_differences(frame_a, frame_b)

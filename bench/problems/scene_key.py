@@ -94,7 +94,8 @@ def label_map(pairs: Iterable[tuple[str, Any]]) -> dict[tuple[str, str | None], 
     for name, found in keys.items():
         digits = _distinguishing_digits({key for key in found if key is not None})
         for key in found:
-            labels[name, key] = name if len(found) == 1 else f"{name} [{UNKNOWN_KEY_LABEL if key is None else key[:digits]}]"
+            shown = UNKNOWN_KEY_LABEL if key is None else key[:digits]
+            labels[name, key] = name if len(found) == 1 else f"{name} [{shown}]"
     return labels
 
 
