@@ -35,6 +35,13 @@ def real_database(tmp_path_factory, fresh_reference_cache) -> tuple[Path, Path, 
     thresholds.write_text(THRESHOLDS_TOML, encoding="utf-8")
     assert cli_main(["run", "--matrix", str(matrix), "--db", str(database), "--jobs", "1", "--no-progress"]) == 0
     assert not Path(f"{database}-wal").exists()
+    from foucault_bench.bench.problems.scene_key import scene_key
+    from foucault_bench.bench.problems.scenes import SCENES
+
+    with sqlite3.connect(f"{database.as_uri()}?mode=ro", uri=True) as connection:  # every row carries its key
+        keys = {key for (key,) in connection.execute("SELECT scene_key FROM runs")}
+    connection.close()
+    assert keys == {scene_key(SCENES["seed_2min"])}
     return database, matrix, thresholds
 
 
