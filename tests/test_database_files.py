@@ -189,3 +189,32 @@ def test_a_wal_database_in_a_read_only_folder_is_read_by_results_check_and_repor
     assert loaded.returncode == 0, loaded.stderr
     assert loaded.stdout.split()[:2] == [str(rows), "runs"]
     assert _digest(copy) == before and sorted(path.name for path in folder.iterdir()) == ["runs.sqlite"]
+
+
+def test_an_older_database_in_a_read_only_folder_is_read_as_it_is(real_database, tmp_path) -> None:
+    """A version-2 database (no scene_key column) that cannot be migrated is read with the missing column
+    unknown: results lists its rows, advise --no-search says they are of unknown physics and uses none."""
+    database, _, _ = real_database
+    folder = tmp_path / "read-only"
+    folder.mkdir()
+    old = folder / "old.sqlite"
+    shutil.copyfile(database, old)
+    with sqlite3.connect(old) as connection:
+        connection.execute("PRAGMA journal_mode=DELETE")
+        connection.execute("ALTER TABLE runs DROP COLUMN scene_key")
+        connection.execute("ALTER TABLE adequacy DROP COLUMN scene_key")
+        connection.execute("PRAGMA user_version = 2")
+        rows = connection.execute("SELECT COUNT(*) FROM runs").fetchone()[0]
+    connection.close()
+    before = _digest(old)
+    run = _read_only_runner(folder)
+    cli = ["-m", "foucault_bench.bench.cli"]
+    listed = run([*cli, "results", "--db", str(old)])
+    assert listed.returncode == 0, listed.stderr
+    summary = [line for line in listed.stdout.splitlines() if line.startswith("seed_2min ")]
+    assert len(summary) == 2  # rk4 and cvode_bdf
+    advised = run([*cli, "advise", "--scene", "seed_2min", "--target", "reference_error=1", "--db", str(old),
+                   "--no-search"])
+    assert advised.returncode == 1, advised.stderr  # nothing of a known physics to recommend
+    assert f"note: {rows} stored runs named seed_2min come from an older database" in advised.stdout
+    assert _digest(old) == before and sorted(path.name for path in folder.iterdir()) == ["old.sqlite"]

@@ -83,8 +83,6 @@ MATRIX_RUN_COLUMNS: tuple[tuple[str, str], ...] = (
     ("package_versions", "TEXT"),  # JSON object: package → version
 )
 
-_RUN_COLUMNS = ", ".join(COLUMN_NAMES)
-"""The run columns in ``COLUMNS`` order (a migrated database holds its added columns last)."""
 _TABLE_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 Result = TypeVar("Result")
 
@@ -155,7 +153,8 @@ class ResultsStore:
             must exist and be a foucault-bench results database (its ``runs`` and ``matrix_runs`` tables, a
             schema version this code reads), else ``InputError``; it is opened read-only (``read_only_connection``)
             and nothing in it changes, its journal mode included, except a migration from an older schema
-            version and ``write_table`` (a second, writing connection opened on first use).
+            version (where the file can be written; else it is read as it is, the columns it lacks NULL) and
+            ``write_table`` (a second, writing connection opened on first use).
 
     Either way an existing file is first read read-only: a database this code cannot read (a newer schema
     version, another program's tables, a damaged file) is refused before anything in it changes. Any
@@ -182,6 +181,7 @@ class ResultsStore:
             self.connection = sqlite3.connect(self.path, timeout=30.0)
             self.connection.execute("PRAGMA journal_mode=WAL")
             self._create_tables()
+            self._run_columns = self._select_list()
 
     def _open_existing(self) -> sqlite3.Connection:
         """A read-only connection to an existing results database (see the class docstring)."""
@@ -193,17 +193,23 @@ class ResultsStore:
                 try:
                     self.connection = writer
                     self._create_tables()
-                except sqlite3.OperationalError as error:
-                    if "readonly" not in str(error):
+                except sqlite3.OperationalError as error:  # a file SQLite cannot write is read as it is
+                    if getattr(error, "sqlite_errorcode", 0) & 0xFF not in (sqlite3.SQLITE_READONLY,
+                                                                            sqlite3.SQLITE_CANTOPEN):
                         raise
-                    raise InputError(f"{self.path}: written with results schema version {self._stored_version}; "
-                                     f"reading it needs the columns version {SCHEMA_VERSION} adds, and the file "
-                                     f"cannot be written ({error}): copy it to a writable folder") from None
                 finally:
                     writer.close()
         with self._database_errors():
             self.connection = read_only_connection(self.path)
+            self._run_columns = self._select_list()
         return self.connection
+
+    def _select_list(self) -> str:
+        """The run columns in ``COLUMNS`` order, those the table lacks as NULL: a database of an older schema
+        version that could not be migrated (its file or folder is read-only) is read as it is, its missing
+        columns unknown; a migrated one holds its added columns last."""
+        stored = {row[1] for row in self.connection.execute(f"PRAGMA table_info({RUNS_TABLE})")}
+        return ", ".join(name if name in stored else f"NULL AS {name}" for name in COLUMN_NAMES)
 
     def _check_readable(self, *, create: bool) -> int:
         """Read the existing file's schema version and tables read-only and refuse (``InputError``, nothing
@@ -506,9 +512,9 @@ class ResultsStore:
         import pandas as pd
 
         if all_runs:
-            return pd.read_sql_query(f"SELECT {_RUN_COLUMNS} FROM {RUNS_TABLE} ORDER BY rowid", self.connection)
+            return pd.read_sql_query(f"SELECT {self._run_columns} FROM {RUNS_TABLE} ORDER BY rowid", self.connection)
         return pd.read_sql_query(
-            f"SELECT {_RUN_COLUMNS} FROM {RUNS_TABLE} WHERE matrix_id = ? ORDER BY rowid",
+            f"SELECT {self._run_columns} FROM {RUNS_TABLE} WHERE matrix_id = ? ORDER BY rowid",
             self.connection,
             params=(self.resolve_matrix_id(matrix_id),),
         )
@@ -517,7 +523,7 @@ class ResultsStore:
     def records(self, matrix_id: str | None = None) -> list[dict[str, Any]]:
         """The run rows of a matrix run (as ``frame`` selects it) as plain dicts, NULL as ``None``, without
         pandas."""
-        cursor = self.connection.execute(f"SELECT {_RUN_COLUMNS} FROM {RUNS_TABLE} WHERE matrix_id = ? ORDER BY rowid",
+        cursor = self.connection.execute(f"SELECT {self._run_columns} FROM {RUNS_TABLE} WHERE matrix_id = ? ORDER BY rowid",
                                          (self.resolve_matrix_id(matrix_id),))
         names = [description[0] for description in cursor.description]
         return [dict(zip(names, values)) for values in cursor]
