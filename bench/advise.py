@@ -1,10 +1,13 @@
 """``foucault-bench advise``: for one scene and one target error, the cheapest integrator and setting, measured.
 
-The answer comes from the results store: among the stored runs of the scene (every matrix run; the latest row of
-each integrator and setting), the cheapest ok run whose error meets the target (``bench.verdicts.pareto``;
-cost = CPU time where stored, else wall time), its measured cost, the next two (the cheapest runs of two other
-integrators meeting it), and which model the scene needs at that accuracy (from the model-adequacy rows the
-runner stores: what a simpler model gets wrong, or what the scene's model leaves out, compared with the target).
+The answer comes from the results store: among the stored runs of the scene (every matrix run; the rows of the
+scene's physics, ``bench.problems.scene_key``, whatever name they were stored under, so that a name reused with
+other physics is never mixed in; the latest row of each integrator and setting), the cheapest ok run whose error
+meets the target (``bench.verdicts.pareto``; cost = CPU time where stored, else wall time), its measured cost,
+the next two (the cheapest runs of two other integrators meeting it), and which model the scene needs at that
+accuracy (from the model-adequacy rows the runner stores for the scene's physics: what a simpler model gets
+wrong, or what the scene's model leaves out, compared with the target). Its cost counts are RHS evaluations, or
+Taylor steps for the taylor family.
 
 When no stored run meets the target, ``search`` runs a small targeted search and stores its runs like any
 matrix run (``bench.run.runner.run_matrix``, a matrix named ``advise-<scene>``): for each integrator of the
@@ -32,6 +35,7 @@ import numpy as np
 import pandas as pd
 
 from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.problems.scene_key import scene_key
 from foucault_bench.bench.problems.scenes import SCENES, Scene, scene_from_mapping
 from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.schema import setting_label
@@ -49,6 +53,8 @@ TOL_RANGE = (1e-14, 1e-3)
 """Tolerances a search may ask for: double precision ends below 1e-14."""
 NEXT = 2
 """Alternatives shown after the recommendation."""
+TAYLOR_FAMILY = "taylor"
+"""The family whose ``nfev`` counts Taylor steps, not right-hand-side evaluations (``bench.schema`` ``nfev``)."""
 
 
 @dataclass(frozen=True)
@@ -77,7 +83,7 @@ class Advice:
 
     def as_dict(self) -> dict[str, Any]:
         return {
-            "scene": self.scene.name, "model": self.scene.model,
+            "scene": self.scene.name, "scene_key": scene_key(self.scene), "model": self.scene.model,
             "target": {"metric": self.target.metric, "value": self.target.value},
             "cost_column": self.cost, "recommended": self.recommended, "next": self.alternatives,
             "model_advice": self.model, "stored_runs": self.stored_runs, "runs_meeting_target": self.meeting,
@@ -150,17 +156,30 @@ def metric_problem(scene: Scene, target: Target) -> str | None:
 # the stored runs
 # --------------------------------------------------------------------------------------------------------------
 def stored_runs(store: ResultsStore, scene: Scene) -> pd.DataFrame:
-    """Every stored row of ``scene`` (same name, model, duration and grid), the latest of each integrator and
-    setting, with the code version of its matrix run."""
+    """Every stored row of ``scene`` (the same physics: ``bench.problems.scene_key``, whatever its name), the
+    latest of each integrator and setting, with the code version of its matrix run."""
     rows = store.frame(all_runs=True)
-    rows = rows[(rows["scene"] == scene.name) & (rows["model"] == scene.model)
-                & np.isclose(rows["duration_s"].astype(float), scene.duration_s, rtol=1e-12, atol=0)
-                & (rows["n_out"] == scene.n_intervals + 1)]
+    rows = rows[rows["scene_key"] == scene_key(scene)]
     versions = store.matrix_runs().set_index("matrix_id")["code_version"]
     rows = rows.assign(code_version=rows["matrix_id"].map(versions))
     setting = [setting_label(kh, tol) for kh, tol in zip(rows["kh"], rows["tol"])]
     return rows.assign(_setting=setting).drop_duplicates(["integrator", "_setting"], keep="last") \
                .drop(columns="_setting").reset_index(drop=True)
+
+
+def same_name_notes(rows: pd.DataFrame, scene: Scene) -> list[str]:
+    """What the stored rows named like ``scene`` but of other or unknown physics are (never used)."""
+    named = rows[rows["scene"] == scene.name]
+    other = named["scene_key"].notna() & (named["scene_key"] != scene_key(scene))
+    unknown = named["scene_key"].isna()
+    notes = []
+    if other.any():
+        notes.append(f"{int(other.sum())} stored runs named {scene.name} have other physics "
+                     f"({named.loc[other, 'scene_key'].nunique()} other scene(s) of that name): not used")
+    if unknown.any():
+        notes.append(f"{int(unknown.sum())} stored runs named {scene.name} come from an older database whose "
+                     "physics could not be recovered: not used")
+    return notes
 
 
 def _run_record(row: pd.Series, metric: str, cost: str) -> dict[str, Any]:
@@ -197,7 +216,9 @@ def model_advice(adequacy: pd.DataFrame, scene: Scene, target: Target) -> dict[s
                       else ("trajectory_gap", "A"))
     if adequacy.empty:
         return {"needed": scene.model, "text": "no model-adequacy rows stored for this scene"}
-    rows = adequacy[adequacy["scene"] == scene.name]
+    if "scene_key" not in adequacy.columns:  # rows of no known physics
+        return {"needed": scene.model, "text": "no model-adequacy rows stored for this scene's physics"}
+    rows = adequacy[adequacy["scene_key"] == scene_key(scene)]
     simpler = rows[rows["model"] == scene.model]  # what each simpler model gets wrong
     richer = rows[rows["simpler_model"] == scene.model]  # what the scene's model leaves out
     what = "precession rate" if quantity == "precession_rate_diff" else "trajectory"
@@ -232,11 +253,13 @@ def _model_rank(model: str) -> int:
 
 
 def _adequacy_rows(store: ResultsStore, runs: pd.DataFrame, scene: Scene) -> pd.DataFrame:
-    """The scene's adequacy rows of the latest matrix run that stored some."""
+    """The scene's adequacy rows (same physics, ``scene_key``) of the latest of its matrix runs that stored
+    some."""
+    key = scene_key(scene)
     for matrix_id in reversed(list(dict.fromkeys(runs["matrix_id"]))):
         rows = store.adequacy(matrix_id)
-        if not rows.empty and (rows["scene"] == scene.name).any():
-            return rows[rows["scene"] == scene.name]
+        if not rows.empty and "scene_key" in rows.columns and (rows["scene_key"] == key).any():
+            return rows[rows["scene_key"] == key]
     return pd.DataFrame()
 
 
@@ -263,7 +286,7 @@ def advise(store: ResultsStore, scene: Scene, target: Target, *, search_jobs: in
     best = None
     if not records and not usable.empty:
         best = _run_record(runs.loc[usable["error"].idxmin()], target.metric, cost)
-    notes = []
+    notes = same_name_notes(store.frame(all_runs=True), scene)
     if not runs.empty:
         from foucault_bench.bench.run.provenance import code_version
 
@@ -386,8 +409,11 @@ def search(store: ResultsStore, scene: Scene, target: Target, runs: pd.DataFrame
 # text
 # --------------------------------------------------------------------------------------------------------------
 def _cost_text(record: dict[str, Any], cost: str) -> str:
+    """``CPU time 1.2 ms, 4000 RHS evaluations``; for the taylor family (heyoka), whose ``nfev`` counts Taylor
+    steps (``bench.schema``), ``…, 300 Taylor steps``."""
     kind = "CPU time" if cost == "cpu_time_s" else "wall time"
-    evaluations = f", {record['nfev']:.0f} evaluations" if record.get("nfev") is not None else ""
+    counted = "Taylor steps" if record.get("family") == TAYLOR_FAMILY else "RHS evaluations"
+    evaluations = f", {record['nfev']:.0f} {counted}" if record.get("nfev") is not None else ""
     return f"{kind} {record['cost_s'] * 1e3:.3g} ms{evaluations}"
 
 
@@ -399,7 +425,8 @@ def _run_text(record: dict[str, Any], metric: str, cost: str) -> str:
 def render_text(advice: Advice) -> str:
     """The answer as a few lines of text."""
     target = advice.target
-    lines = [f"scene {advice.scene.name} ({advice.scene.model} model), target {target.metric} <= {target.value:g}"]
+    lines = [f"scene {advice.scene.name} ({advice.scene.model} model, physics key {scene_key(advice.scene)}), "
+             f"target {target.metric} <= {target.value:g}"]
     if advice.search:
         lines.append(f"no stored run met the target: searched with {advice.search['runs']} runs in "
                      f"{advice.search['seconds']:g} s (stored as matrix runs {', '.join(advice.search['matrix_ids'])})")

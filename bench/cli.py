@@ -1,7 +1,8 @@
 """The ``foucault-bench`` command line: one sub-command per module of ``bench.commands``, imported only when used.
 
 Each command module provides ``add_arguments(parser)`` and ``main(args) -> int`` (``bench.commands``). Bad input
-raises ``bench.errors.InputError``, which is printed as one line per problem with exit status 2 and no traceback.
+raises ``bench.errors.InputError``, which is printed as one line per problem with exit status 2 and no traceback;
+so is an SQLite error (a damaged database; the results store turns its own into ``InputError`` naming the file).
 A matrix run stopped by its Dask cluster (``bench.errors.RunInterrupted``) exits with 75, SIGINT with 130,
 SIGTERM during a matrix run with 143, and a closed output pipe ends quietly with 141 (128 + SIGPIPE). A full disk
 (``bench.errors.is_full_disk``) is one line with exit status 2: outputs are written so that the old ones stay
@@ -17,7 +18,7 @@ import signal
 import sys
 
 from foucault_bench.bench.commands import COMMANDS
-from foucault_bench.bench.errors import InputError, RunInterrupted, is_full_disk
+from foucault_bench.bench.errors import InputError, RunInterrupted, database_error_types, is_full_disk
 
 
 def _module(name: str):
@@ -36,6 +37,13 @@ def main(argv: list[str] | None = None) -> int:
         for problem in error.problems:
             print(f"foucault-bench {args.command}: error: {problem}", file=sys.stderr)
         return 2
+    except database_error_types() as error:  # an SQLite error outside the results store's own reads and writes
+        cause = error.__cause__ if error.__cause__ is not None else error
+        if is_full_disk(cause):
+            return _full_disk(args.command, cause)
+        text = str(cause).splitlines()[0] if str(cause) else type(cause).__name__
+        print(f"foucault-bench {args.command}: error: SQLite: {text}", file=sys.stderr)
+        return 2
     except RunInterrupted as error:
         print(f"foucault-bench {args.command}: interrupted: {error}", file=sys.stderr)
         return error.exit_status
@@ -49,9 +57,13 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as error:
         if not is_full_disk(error):
             raise
-        print(f"foucault-bench {args.command}: error: the disk is full ({error}): free some space and run it "
-              "again; what was written or stored before is unchanged", file=sys.stderr)
-        return 2
+        return _full_disk(args.command, error)
+
+
+def _full_disk(command: str, error: BaseException) -> int:
+    print(f"foucault-bench {command}: error: the disk is full ({error}): free some space and run it "
+          "again; what was written or stored before is unchanged", file=sys.stderr)
+    return 2
 
 
 def build_parser_for(argv: list[str]) -> argparse.ArgumentParser:

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import sqlite3
+import sys
+
 
 class InputError(Exception):
     """Bad user input (matrix, thresholds, arguments): one message per problem, nothing has run yet."""
@@ -28,6 +31,15 @@ def is_full_disk(error: BaseException) -> bool:
     if isinstance(error, OSError):
         return error.errno in (errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC))
     return isinstance(error, sqlite3.Error) and getattr(error, "sqlite_errorcode", None) == sqlite3.SQLITE_FULL
+
+
+def database_error_types() -> tuple[type[BaseException], ...]:
+    """The errors of reading or writing an SQLite file: ``sqlite3.DatabaseError`` (a damaged file, a full disk,
+    a locked or read-only database), and pandas' ``DatabaseError``, which ``read_sql_query`` raises from one,
+    once pandas is loaded (nothing here imports it)."""
+    pandas_errors = sys.modules.get("pandas.errors")
+    pandas_error = getattr(pandas_errors, "DatabaseError", None)
+    return (sqlite3.DatabaseError,) + ((pandas_error,) if pandas_error is not None else ())
 
 
 def require_extra(module: str, extra: str, feature: str) -> None:

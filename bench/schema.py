@@ -33,7 +33,8 @@ COLUMNS: tuple[Column, ...] = (
     # identity and setting
     Column("run_key", "TEXT", "", "hash of scene, integrator, setting and code version; --resume skips stored keys"),
     Column("matrix_id", "TEXT", "", "id of the matrix run that produced the row (provenance table)"),
-    Column("scene", "TEXT", "", "scene name"),
+    Column("scene", "TEXT", "", "scene name (chosen by a matrix file: two scenes may share one)"),
+    Column("scene_key", "TEXT", "", "hash of the scene's physics (model, every pendulum parameter and the release, duration, output grid; bench.problems.scene_key): rows of one name and two keys are two scenes; NULL for rows of an older database whose physics could not be recovered"),
     Column("model", "TEXT", "", "model name (linear, seed_planar, spherical)"),
     Column("integrator", "TEXT", "", "integrator name (registry key)"),
     Column("family", "TEXT", "", "integrator family (colours, thresholds)"),
@@ -71,7 +72,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("wall_time_spread_s", "REAL", "s", "max − min of the timed repeats' wall times"),
     Column("repeats", "INTEGER", "", "timed repeats after the warm-up"),
     Column("compile_time_s", "REAL", "s", "first-call wall time minus the median wall time (JIT compile or cache load)"),
-    Column("nfev", "INTEGER", "", "right-hand-side evaluations (for heyoka: Taylor steps, each an order-p expansion, not comparable)"),
+    Column("nfev", "INTEGER", "", "right-hand-side evaluations; for the taylor family (heyoka) the Taylor steps instead, each an order-p expansion costing about p evaluations: not comparable with other families' counts"),
     Column("njev", "INTEGER", "", "Jacobian evaluations where reported"),
     Column("steps", "INTEGER", "", "accepted steps (the charts' second cost axis, counted for every family; one step = s RHS evaluations for Runge-Kutta, one order-p Taylor expansion for heyoka)"),
     Column("rejected_steps", "INTEGER", "", "rejected steps where the library reports them"),
@@ -109,12 +110,21 @@ DECLARED_FACTS: dict[str, str] = {
 }
 """Results column → the ``integrators.Integrator`` class attribute it stores."""
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 """Version of ``COLUMNS`` (stored as the database's ``PRAGMA user_version``)."""
+SCENE_KEY_MIGRATION = (
+    "runs and adequacy rows lack scene_key: added, and filled for the old rows of a built-in scene (or its "
+    "-azψ variant) where a row's run key proves the row was made with that scene's present physics; NULL where "
+    "it cannot be proved (inline scenes, changed built-in scenes): such rows are a scene of unknown physics, "
+    "shown as 'name [unknown physics]' beside a name's known keys, never used by advise, and matched by "
+    "results --compare only with rows of unknown physics"
+)
 MIGRATIONS: dict[int, str] = {
     1: "runs lack the declared integrator facts (declared_order, stages, adaptive, stability_limit_kh) and the "
        "precession errors in rad/s and relative to Ω_E (precession_rate_error_rad_s, _earth, "
-       "precession_rate_ref_error_rad_s, _earth): added as NULL columns, unknown for the old rows",
+       "precession_rate_ref_error_rad_s, _earth): added as NULL columns, unknown for the old rows; and, as for "
+       "version 2, " + SCENE_KEY_MIGRATION,
+    2: SCENE_KEY_MIGRATION,
 }
 """Older schema version → what a database written under it lacks (the store adds the missing columns)."""
 

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Callable
 import pandas as pd
 from foucault_bench.bench.atomic import replacing_folder
 from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.problems.scene_key import scene_labels
 from foucault_bench.bench.problems.scenes import SCENES
 from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.schema import COLUMN_NAMES
@@ -535,8 +536,12 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
         runs = store.frame(matrix_id)
         if runs.empty:
             raise InputError(f"matrix run {matrix_id} in {db} has no stored runs")
+        runs = runs.assign(scene=scene_labels(runs))  # a name with two physics is two scenes, never merged
+        adequacy = store.adequacy(matrix_id)
+        if not adequacy.empty:
+            adequacy = adequacy.assign(scene=scene_labels(adequacy, runs))
         study_tables = {} if studies == "skip" else _study_tables(store, db, recompute=studies == "recompute")
-        inputs = ReportInputs(runs=runs, studies=study_tables, adequacy=store.adequacy(matrix_id),
+        inputs = ReportInputs(runs=runs, studies=study_tables, adequacy=adequacy,
                               provenance={"database": str(db), **_provenance(store, matrix_id)},
                               targets=targets)
     with replacing_folder(out, "--out", "report") as staging:

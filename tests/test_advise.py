@@ -12,6 +12,7 @@ import pytest
 
 from foucault_bench.bench.advise import Target, advise
 from foucault_bench.bench.cli import main as cli_main
+from foucault_bench.bench.problems.scene_key import scene_key
 from foucault_bench.bench.problems.scenes import SCENES
 from foucault_bench.bench.run.matrix import Matrix
 from foucault_bench.bench.run.store import ResultsStore
@@ -35,7 +36,8 @@ def synthetic_store(path: Path, seed: int) -> None:
             name, family, adaptive = INTEGRATORS[number % len(INTEGRATORS)]
             row = dict.fromkeys(COLUMN_NAMES)
             setting = float(10 ** rng.uniform(-12, -3)) if adaptive else 2.0 ** -(1 + number // len(INTEGRATORS))
-            row.update(run_key=f"k{number}", matrix_id=matrix_id, scene=SCENE.name, model=SCENE.model,
+            row.update(run_key=f"k{number}", matrix_id=matrix_id, scene=SCENE.name, scene_key=scene_key(SCENE),
+                       model=SCENE.model,
                        integrator=name, family=family, kh=None if adaptive else setting,
                        tol=setting if adaptive else None, duration_s=SCENE.duration_s, n_out=SCENE.n_intervals + 1,
                        status=str(rng.choice(["ok", "ok", "ok", "diverged", "failed"])), message="",
@@ -44,7 +46,7 @@ def synthetic_store(path: Path, seed: int) -> None:
             store.write_run(row)
         store.write_adequacy(matrix_id, SCENE.name, [
             {"model": "spherical", "simpler_model": "linear", "scene_model": "linear",
-             "precession_rate_diff": 7.5e-4, "trajectory_gap": 1.5e-4, "note": ""}])
+             "precession_rate_diff": 7.5e-4, "trajectory_gap": 1.5e-4, "note": ""}], scene_key=scene_key(SCENE))
         store.finish_matrix_run(matrix_id)
 
 
@@ -116,3 +118,121 @@ def test_an_inline_scene_without_runs_is_searched_and_its_runs_stored(tmp_path: 
     ok = rows[(rows["status"] == "ok") & (rows["reference_error"] <= 1e-6)]
     assert answer.recommended["cost_s"] == ok[cost_column(rows)].min()  # CPU time where the runs have it
     assert set(rows["scene"]) == {"lab_v1.5"}
+
+
+# --- a scene is its physics, not its name ------------------------------------------------------------------------
+
+
+def _inline_scene(tmp_path: Path, file_name: str, latitude_deg: float):
+    from foucault_bench.bench.advise import resolve_scene
+
+    matrix_file = tmp_path / file_name
+    matrix_file.write_text(f'integrators = ["rk4"]\nkh = [0.1]\n[scene.S]\nbase = "lab_3m"\nduration_s = 20.25\n'
+                           f'latitude_deg = {latitude_deg}\n', encoding="utf-8")
+    scene, problems = resolve_scene("S", str(matrix_file))
+    assert not problems
+    return matrix_file, scene
+
+
+def _store_scene_rows(store: ResultsStore, scene, errors_and_costs: dict[tuple[str, float], tuple[float, float]],
+                      trajectory_gap: float) -> str:
+    """One matrix run holding a row per (integrator, setting) → (reference error, CPU time) of ``scene``, and its
+    adequacy row (the linear model off by ``trajectory_gap``)."""
+    matrix = Matrix(name="named-S", description="", source="test", scenes=(), runs=(), plugins=(),
+                    timing=TimingPolicy())
+    matrix_id, _ = store.start_matrix_run(matrix, jobs=1, scheduler=None, resume=False)
+    families = {"rk4": ("runge-kutta", False), "heyoka_taylor": ("taylor", True)}
+    for number, ((integrator, setting), (error, cost)) in enumerate(errors_and_costs.items()):
+        family, adaptive = families[integrator]
+        row = dict.fromkeys(COLUMN_NAMES)
+        row.update(run_key=f"{matrix_id}-{number}", matrix_id=matrix_id, scene=scene.name,
+                   scene_key=scene_key(scene), model=scene.model, integrator=integrator, family=family,
+                   kh=None if adaptive else setting, tol=setting if adaptive else None, duration_s=scene.duration_s,
+                   n_out=scene.n_intervals + 1, status="ok", message="", reference_error=error, cpu_time_s=cost,
+                   wall_time_s=cost, nfev=1000 + number)
+        store.write_run(row)
+    store.write_adequacy(matrix_id, scene.name, [
+        {"model": scene.model, "simpler_model": "linear", "scene_model": scene.model,
+         "precession_rate_diff": 1e-9, "trajectory_gap": trajectory_gap, "note": ""}], scene_key=scene_key(scene))
+    store.finish_matrix_run(matrix_id)
+    return matrix_id
+
+
+def test_a_name_reused_with_other_physics_never_answers_for_the_original(tmp_path: Path, capsys) -> None:
+    """Two matrix files define scene S at 48.8° N and 60° S; the later one's runs are cheaper and worse, and its
+    adequacy row says 0.53 A. advise --matrix a.toml --scene S answers from the 48.8° N rows only: the
+    recommendation is recomputed here from those rows (the cheapest meeting the target), and the model line
+    quotes their 0.032 A."""
+    file_a, scene_a = _inline_scene(tmp_path, "a.toml", 48.8)
+    _, scene_b = _inline_scene(tmp_path, "b.toml", -60.0)
+    assert scene_key(scene_a) != scene_key(scene_b)
+    own = {("rk4", 0.1): (1e-7, 0.010), ("rk4", 0.05): (6e-9, 0.020), ("heyoka_taylor", 1e-9): (2e-8, 0.015)}
+    other = {("rk4", 0.1): (1e-3, 0.001), ("rk4", 0.05): (7e-7, 0.002), ("heyoka_taylor", 1e-9): (2e-7, 0.003)}
+    path = tmp_path / "results.sqlite"
+    with ResultsStore(path) as store:
+        _store_scene_rows(store, scene_a, own, trajectory_gap=0.032)
+        _store_scene_rows(store, scene_b, other, trajectory_gap=0.53)  # later: the "latest" rows of the name
+    target = 1e-6
+    meeting = sorted((cost, integrator, setting) for (integrator, setting), (error, cost) in own.items()
+                     if error <= target)
+    code = cli_main(["advise", "--matrix", str(file_a), "--scene", "S", "--target", f"reference_error={target}",
+                     "--db", str(path), "--json", "--no-search"])
+    answer = json.loads(capsys.readouterr().out)
+    assert code == 0 and answer["scene_key"] == scene_key(scene_a)
+    recommended = answer["recommended"]
+    assert (recommended["cost_s"], recommended["integrator"]) == meeting[0][:2]
+    assert recommended["reference_error"] == own[meeting[0][1], meeting[0][2]][0]
+    assert [(run["cost_s"], run["integrator"]) for run in answer["next"]] == [meeting[1][:2]]
+    assert answer["stored_runs"] == len(own) and answer["runs_meeting_target"] == len(meeting)
+    assert "0.032 A" in answer["model_advice"]["text"] and "0.53" not in answer["model_advice"]["text"]
+    assert any(f"{len(other)} stored runs named S have other physics" in note for note in answer["notes"])
+
+
+def test_advise_counts_taylor_steps_as_taylor_steps(tmp_path: Path, capsys) -> None:
+    """heyoka's nfev counts Taylor steps (bench.schema): the answer says so, and says RHS evaluations for
+    Runge-Kutta runs; the counts are the stored ones."""
+    file_a, scene = _inline_scene(tmp_path, "a.toml", 48.8)
+    path = tmp_path / "results.sqlite"
+    with ResultsStore(path) as store:
+        _store_scene_rows(store, scene, {("heyoka_taylor", 1e-9): (1e-9, 0.001), ("rk4", 0.05): (1e-8, 0.002)},
+                          trajectory_gap=0.01)
+        rows = store.frame().set_index("integrator")
+    assert cli_main(["advise", "--matrix", str(file_a), "--scene", "S", "--target", "reference_error=1e-6",
+                     "--db", str(path), "--no-search"]) == 0
+    out = capsys.readouterr().out
+    recommended = next(line for line in out.splitlines() if line.startswith("recommended:"))
+    following = next(line for line in out.splitlines() if "rk4" in line)
+    assert "heyoka_taylor" in recommended and f"{rows.loc['heyoka_taylor', 'nfev']} Taylor steps" in recommended
+    assert "evaluations" not in recommended
+    assert f"{rows.loc['rk4', 'nfev']} RHS evaluations" in following
+
+
+def test_no_search_refuses_a_missing_database_and_creates_nothing(tmp_path: Path, capsys) -> None:
+    missing = tmp_path / "typo" / "x.sqlite"
+    assert cli_main(["advise", "--scene", "pantheon", "--target", "reference_error=1e-6", "--db", str(missing),
+                     "--no-search"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no results database" in err[0] and "Traceback" not in err[0]
+    assert not (tmp_path / "typo").exists()
+
+
+def test_no_search_only_reads_the_database(tmp_path: Path, capsys) -> None:
+    """A rollback-journal database (as another tool may write it) stays byte for byte the same, in the same
+    journal mode, with no -wal file, after advise --no-search."""
+    import hashlib
+    import sqlite3
+
+    path = tmp_path / "results.sqlite"
+    synthetic_store(path, 0)
+    with sqlite3.connect(path) as connection:
+        connection.execute("PRAGMA journal_mode=DELETE")
+    connection.close()
+    before = hashlib.sha256(path.read_bytes()).hexdigest()
+    assert cli_main(["advise", "--scene", SCENE.name, "--target", "reference_error=1e-3", "--db", str(path),
+                     "--no-search"]) == 0
+    capsys.readouterr()
+    assert hashlib.sha256(path.read_bytes()).hexdigest() == before
+    assert not (tmp_path / "results.sqlite-wal").exists()
+    with sqlite3.connect(f"{path.as_uri()}?mode=ro", uri=True) as connection:
+        assert connection.execute("PRAGMA journal_mode").fetchone()[0] == "delete"
+    connection.close()

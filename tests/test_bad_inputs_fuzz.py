@@ -51,9 +51,6 @@ class Case:
     setup: Callable[[Path], None] | None = None
     problems: int = 1
     argparse: bool = False
-    pending: str = ""
-    """Why this case still fails on this branch (fixed on another, merged separately): run as a non-strict
-    xfail until then; drop the field once the fix is in."""
 
 
 def matrix_case(name: str, text: str | bytes, *expected: str, problems: int = 1) -> Case:
@@ -202,8 +199,7 @@ CASES: tuple[Case, ...] = (
          ("there is no file", "relative to the file's own folder"),
          files=(("gate/t.toml", 'matrix = "m.toml"\n' + BOUND), ("m.toml", TINY))),
     Case("check an unfinished matrix run", ("check", "--thresholds", "{d}/t.toml", "--results", "{d}/partial.sqlite"),
-         ("is 'running', not 'finished': 1 of 2 planned rows",), files=(("t.toml", BOUND),), setup=_unfinished_run,
-         pending="reading a WAL database leaves -wal/-shm files (issue 19 item 10, the store's branch)"),
+         ("is 'running', not 'finished': 1 of 2 planned rows",), files=(("t.toml", BOUND),), setup=_unfinished_run),
     Case("allow-unfinished without results", ("check", "--thresholds", "{d}/t.toml", "--allow-unfinished"),
          ("--allow-unfinished is for a stored matrix run",), files=(("t.toml", BOUND),)),
     Case("matrix id without results", ("check", "--thresholds", "{d}/t.toml", "--matrix-id", "x"),
@@ -235,14 +231,11 @@ CASES: tuple[Case, ...] = (
          ("unknown integrator 'nope'", "--hours", ".gif or .mp4", "--frames"), problems=4),
     Case("simulate frames not an integer", ("simulate", "--frames", "1e8"), ("invalid int value",), argparse=True),
     Case("results writing over its own database", ("results", "--db", "{d}/partial.sqlite", "--csv",
-                                                   "{d}/partial.sqlite"), ("partial.sqlite",), setup=_unfinished_run,
-         pending="outputs compared with inputs (issue 19 item 1, the outputs branch)"),
-    Case("seed into a folder under a file", ("seed", "--out", "{d}/m.toml/seed"), ("--out",), files=(("m.toml", TINY),),
-         pending="seed --out checked before any work (issue 19 item 14, the outputs branch)"),
+                                                   "{d}/partial.sqlite"), ("partial.sqlite",), setup=_unfinished_run),
+    Case("seed into a folder under a file", ("seed", "--out", "{d}/m.toml/seed"), ("--out",), files=(("m.toml", TINY),)),
     # --- advise ---
     Case("advise without a database", ("advise", "--scene", "pantheon", "--target", "reference_error=1e-6",
-                                       "--no-search", "--db", "{d}/typo/x.sqlite"), ("x.sqlite",),
-         pending="advise --no-search refuses a missing database (issue 19 item 9, the store's branch)"),
+                                       "--no-search", "--db", "{d}/typo/x.sqlite"), ("x.sqlite",)),
     Case("advise unknown scene", ("advise", "--scene", "nope", "--target", "reference_error=1e-6", "--no-search",
                                   "--db", "{d}/none.sqlite"), ("unknown scene 'nope'",)),
     Case("advise malformed target", ("advise", "--scene", "pantheon", "--target", "bogus", "--no-search",
@@ -287,10 +280,7 @@ def case_folder(tmp_path, monkeypatch) -> Path:
     return folder
 
 
-@pytest.mark.parametrize("case", [
-    pytest.param(case, id=case.name, marks=[pytest.mark.xfail(reason=case.pending, strict=False)] if case.pending else [])
-    for case in CASES
-])
+@pytest.mark.parametrize("case", CASES, ids=[case.name for case in CASES])
 def test_bad_input_is_one_line_per_problem_and_changes_nothing(case: Case, case_folder: Path, capsys) -> None:
     for name, content in case.files:
         path = case_folder / name

@@ -72,3 +72,63 @@ def test_an_integrator_with_no_comparable_run_shows_a_dash(two_runs):
     costs.loc[costs["integrator"] == "cvode_bdf", "compile_time_s_ratio_b_over_a"] = np.nan
     row = next(line for line in cost_ratio_text(costs).splitlines() if line.startswith("cvode_bdf"))
     assert "–" in row
+
+
+# --- scenes are matched by physics; values shown exactly; each unmatched run's side named --------------------
+
+
+def _matrix_run(store, runs, change=None) -> str:
+    """A matrix run of ``runs`` (index in MATRIX.runs, run) as ``fake_row`` makes them, ``change`` applied."""
+    matrix_id, _ = store.start_matrix_run(MATRIX, jobs=1, scheduler=None, resume=False)
+    for index, run in runs:
+        row = fake_row(run, matrix_id, index)
+        store.write_run(change(index, row) if change else row)
+    store.finish_matrix_run(matrix_id)
+    return matrix_id
+
+
+def test_a_scene_with_other_physics_under_the_same_name_is_named_not_listed_run_by_run(tmp_path, capsys):
+    import dataclasses
+
+    from foucault_bench.bench.problems.scene_key import scene_key
+
+    scene = MATRIX.runs[0].scene
+    elsewhere = dataclasses.replace(scene, params=dataclasses.replace(scene.params, latitude_deg=-60.0))
+    other_runs = [dataclasses.replace(run, scene=elsewhere) for run in MATRIX.runs]
+    with ResultsStore(tmp_path / "db.sqlite") as store:
+        id_a = _matrix_run(store, enumerate(MATRIX.runs))
+        id_b = _matrix_run(store, enumerate(other_runs))
+    assert cli_main(["results", "--db", str(tmp_path / "db.sqlite"), "--compare", id_a, id_b]) == 1
+    out = capsys.readouterr().out
+    assert (f"scene {scene.name} has other physics in A ({scene_key(scene)}) than in B ({scene_key(elsewhere)})"
+            in out)
+    assert f"0 runs in both, {len(MATRIX.runs)} only in A, {len(other_runs)} only in B" in out
+    assert f"only in A: {len(MATRIX.runs)} run(s) of scene {scene.name}" in out
+    assert f"only in B: {len(other_runs)} run(s) of scene {scene.name}" in out
+    assert "only in A: seed_2min" not in out  # not one line per run
+
+
+def test_mismatched_values_are_printed_exactly_and_unmatched_runs_name_their_side(tmp_path, capsys):
+    """B's reference error of one run is one ulp above A's: the two printed values read back as the two stored
+    doubles (so they visibly differ). A holds a run B lacks, and B one A lacks: each is listed with its side."""
+    def one_ulp_up(index, row):
+        if index == 1:
+            row["reference_error"] = float(np.nextafter(row["reference_error"], 1.0))
+        return row
+
+    with ResultsStore(tmp_path / "db.sqlite") as store:
+        indexed = list(enumerate(MATRIX.runs))
+        id_a = _matrix_run(store, indexed[:-1])
+        id_b = _matrix_run(store, indexed[1:], change=one_ulp_up)
+        frame_a, frame_b = store.frame(id_a), store.frame(id_b)
+    assert cli_main(["results", "--db", str(tmp_path / "db.sqlite"), "--compare", id_a, id_b]) == 1
+    out = capsys.readouterr().out
+    line = next(line for line in out.splitlines() if "reference_error" in line and "kh=" in line)
+    shown_a, shown_b = (float(value) for value in line.split()[-2:])
+    run = MATRIX.runs[1]
+    stored_a = frame_a.loc[frame_a["run_key"] == run.run_key, "reference_error"].item()
+    stored_b = frame_b.loc[frame_b["run_key"] == run.run_key, "reference_error"].item()
+    assert (shown_a, shown_b) == (stored_a, stored_b) and shown_a != shown_b
+    first, last = MATRIX.runs[0], MATRIX.runs[-1]
+    assert f"only in A: {first.scene.name} {first.integrator} kh={first.kh!r}" in out
+    assert f"only in B: {last.scene.name} {last.integrator} tol={last.tol!r}" in out

@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 
 from foucault_bench.bench.cli import main as cli_main
+from foucault_bench.bench.problems.scene_key import scene_key
 from foucault_bench.bench.run.matrix import parse_matrix
 from foucault_bench.bench.schema import COLUMN_NAMES
 from foucault_bench.bench.run.store import ResultsStore, compare_runs, summarize
@@ -21,7 +22,8 @@ MATRIX = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4", "cvode_bd
 def fake_row(run, matrix_id: str, index: int) -> dict:
     """A complete row with distinct, awkward values (NaN, tiny and huge floats) for round-trip checks."""
     row = dict.fromkeys(COLUMN_NAMES)
-    row.update(run_key=run.run_key, matrix_id=matrix_id, scene=run.scene.name, model=run.scene.model,
+    row.update(run_key=run.run_key, matrix_id=matrix_id, scene=run.scene.name, scene_key=scene_key(run.scene),
+               model=run.scene.model,
                integrator=run.integrator, family="test", kh=run.kh, tol=run.tol, step_s=run.step_s, status="ok",
                message="", duration_s=run.scene.duration_s, n_out=61 + index, energy_conserved=1,
                energy_max_rel_error=np.float64(1.0 / 3.0 + index), energy_drift_per_s=-2.5e-300,
@@ -115,7 +117,9 @@ def test_compare_finds_a_one_ulp_difference_and_reports_cost_ratios(filled):
     assert mismatches["run"].iloc[0] == f"seed_2min rk4 kh={rows[1]['kh']!r}"
     assert np.allclose(costs["wall_time_s_ratio_b_over_a"], 2.0)
     mismatches, costs, unmatched = compare_runs(frame, frame.iloc[1:])
-    assert unmatched == [f"seed_2min rk4 kh={rows[0]['kh']!r}"]
+    assert unmatched == [("A", f"seed_2min rk4 kh={rows[0]['kh']!r}")]
+    mismatches, costs, unmatched = compare_runs(frame.iloc[1:], frame)
+    assert unmatched == [("B", f"seed_2min rk4 kh={rows[0]['kh']!r}")]
 
 
 def test_summary_has_one_line_per_scene_and_integrator_with_the_best_error(filled):
@@ -229,3 +233,58 @@ def test_a_database_this_version_cannot_read_is_refused_in_one_line(tmp_path, ca
     err = capsys.readouterr().err.strip().splitlines()
     expected = "newer than this foucault-bench reads" if case == "newer version" else "does not define (colour)"
     assert len(err) == 1 and expected in err[0]
+
+
+def test_a_version_2_database_gets_the_scene_keys_its_run_keys_prove(tmp_path):
+    """Migration 2 → 3: rows of a built-in scene and of its -azψ variant get that scene's key when their run keys
+    hash its present physics (a fixed-step row whose stored step differs from the hashed one inherits its
+    scene's proved key); an inline scene, and an inline scene reusing a built-in name with other physics, stay
+    NULL (unknown physics). Adequacy rows get their runs' key."""
+    import sqlite3
+
+    from foucault_bench.bench.problems.scene_key import scene_key, scene_labels
+    from foucault_bench.bench.problems.scenes import SCENES
+
+    import dataclasses
+
+    matrix = parse_matrix({
+        "scenes": ["seed_2min"], "integrators": ["rk4", "cvode_bdf"], "kh": [0.2], "tol": [1e-6],
+        "release_azimuth_deg": [90, 45], "scene": {"inline": {"base": "seed_2min", "latitude_deg": 10.0}}},
+        source="test", default_name="old")
+    pantheon = SCENES["pantheon"]  # a built-in name with other physics (as another code version defined it)
+    other_pantheon = dataclasses.replace(pantheon, params=dataclasses.replace(pantheon.params, latitude_deg=10.0))
+    firsts = {run.integrator: run for run in reversed(matrix.runs)}.values()  # one run per integrator
+    runs = [*matrix.runs, *(dataclasses.replace(run, scene=other_pantheon) for run in firsts)]
+    path = tmp_path / "old.sqlite"
+    with ResultsStore(path) as store:
+        matrix_id, _ = store.start_matrix_run(matrix, jobs=1, scheduler=None, resume=False)
+        for index, run in enumerate(runs):
+            row = fake_row(run, matrix_id, index)
+            if run.kh is not None and run.scene.name == "seed_2min-az45":
+                row["kh"] = np.nextafter(run.kh, 0.0)  # the step taken, not the one in the run key
+            store.write_run(row)
+            store.write_adequacy(matrix_id, run.scene.name, [{"model": "spherical", "trajectory_gap": 0.1}],
+                                 scene_key=scene_key(run.scene))
+        store.finish_matrix_run(matrix_id)
+    with sqlite3.connect(path) as connection:
+        for table in ("runs", "adequacy"):
+            connection.execute(f"ALTER TABLE {table} DROP COLUMN scene_key")
+        connection.execute("PRAGMA user_version = 2")
+    connection.close()
+
+    with ResultsStore(path, create=False) as store:
+        assert store.schema_version == 3
+        rows = store.frame()
+        adequacy = store.adequacy()
+    expected = {}
+    for run in runs:
+        proved = run.scene.name.startswith("seed_2min-az")  # built-in physics (with its azimuth variants)
+        expected[run.run_key] = scene_key(run.scene) if proved else None
+    got = {key: (value if isinstance(value, str) else None)
+           for key, value in zip(rows["run_key"], rows["scene_key"], strict=True)}
+    assert got == expected
+    assert sum(value is not None for value in got.values()) == 4  # seed_2min-az90 and -az45, 2 runs each
+    by_scene = dict(zip(adequacy["scene"], adequacy["scene_key"], strict=True))
+    assert by_scene["seed_2min-az45"] == scene_key(matrix.scenes[1]) and pd.isna(by_scene["inline-az45"])
+    assert set(scene_labels(rows)) == {"seed_2min-az90", "seed_2min-az45", "inline-az90", "inline-az45",
+                                       "pantheon"}  # one physics (known or not) per name: plain names

@@ -3,8 +3,9 @@
     foucault-bench advise --scene NAME --target METRIC=VALUE [--db DB] [--matrix FILE] [--json] [--jobs N]
 
 Bad input (unknown scene or metric, a target that is not a number > 0, a metric that does not exist for the
-scene's model) is exit status 2 with one line per problem; no run meeting the target even after the search is
-exit status 1.
+scene's model, a missing database with ``--no-search``, a damaged database) is exit status 2 with one line per
+problem; no run meeting the target even after the search is exit status 1. With ``--no-search`` the database is
+opened read-only and must exist.
 """
 
 from __future__ import annotations
@@ -30,7 +31,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="worker processes for the search when no stored run meets the target "
                              "(default: the cores available)")
     parser.add_argument("--no-search", action="store_true",
-                        help="answer from the stored runs only, never run a search")
+                        help="answer from the stored runs only, never run a search (the database is only read, "
+                             "and must exist)")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -49,7 +51,7 @@ def main(args: argparse.Namespace) -> int:
     if problems:
         raise InputError(problems)
     jobs = None if args.no_search else (args.jobs or available_cores())
-    with ResultsStore(args.db, create=True) as store:
+    with ResultsStore(args.db, create=not args.no_search) as store:
         answer = advise(store, scene, target, search_jobs=jobs, progress=not args.json and sys.stderr.isatty())
     print(render_json(answer) if args.json else render_text(answer))
     return 0 if answer.recommended is not None else 1

@@ -62,26 +62,64 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _compare(store, first: str, second: str) -> int:
-    from foucault_bench.bench.run.store import compare_runs
+    from foucault_bench.bench.run.store import compare_runs, scene_differences
 
     id_a, id_b = store.resolve_matrix_id(first), store.resolve_matrix_id(second)
-    mismatches, costs, unmatched = compare_runs(store.frame(id_a), store.frame(id_b))
+    frame_a, frame_b = store.frame(id_a), store.frame(id_b)
+    mismatches, costs, unmatched = compare_runs(frame_a, frame_b)
     code = store.matrix_runs().set_index("matrix_id")["code_version"]
-    print(f"A = {id_a}, B = {id_b}: {len(costs)} runs in both, {len(unmatched)} in only one")
+    only = {side: sum(other == side for other, _ in unmatched) for side in "AB"}
+    print(f"A = {id_a}, B = {id_b}: {len(costs)} runs in both, {only['A']} only in A, {only['B']} only in B")
     if code[id_a] != code[id_b]:
         print(f"note: different code versions (A {code[id_a]}, B {code[id_b]}): differences may be real changes")
+    differing = scene_differences(frame_a, frame_b)
+    for reason in differing.values():
+        print(f"note: {reason}")
     if costs.empty:
         print("nothing to compare: the two matrix runs share no run")
+        print(unmatched_text(unmatched, frame_a, frame_b, set(differing)))
         return 1
     print(cost_ratio_text(costs))
     if mismatches.empty:
         print(f"\naccuracy columns: identical bit for bit in all {len(costs)} shared runs")
     else:
-        print(f"\naccuracy columns: {len(mismatches)} MISMATCH(ES)")
-        print(mismatches.to_string(index=False))
-    for run in unmatched:
-        print(f"only in one of the two: {run}")
+        print(f"\naccuracy columns: {len(mismatches)} MISMATCH(ES) (values as Python's repr: the shortest text "
+              "that reads back as the same double, so two values shown alike are equal)")
+        shown = mismatches.assign(a=mismatches["a"].map(_exact), b=mismatches["b"].map(_exact))
+        print(shown.to_string(index=False))
+    print(unmatched_text(unmatched, frame_a, frame_b, set(differing)))
     return 0 if mismatches.empty and not unmatched else 1
+
+
+def _exact(value) -> str:
+    """A stored value as text that tells every two doubles apart (``repr`` of the float; missing as NULL)."""
+    import pandas as pd
+
+    if value is None or (not isinstance(value, str) and pd.isna(value)):
+        return "NULL"
+    return repr(float(value)) if isinstance(value, (int, float)) and not isinstance(value, bool) else str(value)
+
+
+def unmatched_text(unmatched: list[tuple[str, str]], frame_a, frame_b, differing: set[str]) -> str:
+    """The runs in only one matrix run, each with its side; those of a scene whose physics differs between A
+    and B (``differing``, named above them) counted per scene and side instead of listed."""
+    from foucault_bench.bench.run.store import run_identity
+
+    scene_of = {}
+    for side, frame, other in (("A", frame_a, frame_b), ("B", frame_b, frame_a)):
+        scene_of.update({(side, run): scene for run, scene in zip(run_identity(frame, other), frame["scene"],
+                                                                  strict=True)})
+    counted: dict[tuple[str, str], int] = {}
+    lines = []
+    for side, run in unmatched:
+        scene = scene_of[side, run]
+        if scene in differing:
+            counted[scene, side] = counted.get((scene, side), 0) + 1
+        else:
+            lines.append(f"only in {side}: {run}")
+    lines += [f"only in {side}: {count} run(s) of scene {scene} (its physics differs from the other side's)"
+              for (scene, side), count in sorted(counted.items())]
+    return "\n".join(lines)
 
 
 def cost_ratio_text(costs) -> str:

@@ -18,7 +18,6 @@ reference once: the others wait and load it. Within a process, loaded references
 
 from __future__ import annotations
 
-import dataclasses
 import fcntl
 import functools
 import hashlib
@@ -34,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from foucault_bench.bench.problems.scene_key import physics_identity
 from foucault_bench.bench.problems.scenes import Scene
 from foucault_bench.bench.run.provenance import PACKAGE_ROOT, source_digest
 from foucault_bench.integrators import STATUS_OK, get_integrator
@@ -91,16 +91,6 @@ def sources_version() -> str:
     sources = sorted((PACKAGE_ROOT / "models").glob("*.py"))
     sources += [integrator_module, PACKAGE_ROOT / "integrators" / "adaptive.py"]
     return source_digest(f"heyoka {version('heyoka')}; format {CACHE_FORMAT}", dict.fromkeys(sources))
-
-
-def physics_identity(scene: Scene) -> dict[str, Any]:
-    """The scene fields that determine its trajectory (not its name or texts)."""
-    return {
-        "model": scene.model,
-        "params": dataclasses.asdict(scene.params),
-        "duration_s": scene.duration_s,
-        "output_interval_s": scene.output_interval_s,
-    }
 
 
 def reference_key(scene: Scene) -> str:

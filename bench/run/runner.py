@@ -52,6 +52,7 @@ from typing import TYPE_CHECKING, Any, Iterator
 from tqdm import tqdm
 
 from foucault_bench.bench.errors import RunInterrupted
+from foucault_bench.bench.problems.scene_key import scene_key
 from foucault_bench.bench.run.executors import WORKER_DIED, DaskExecutor, LocalExecutor, make_executor
 from foucault_bench.bench.run.timing import limit_threads, peak_rss_mb, time_repeated
 from foucault_bench.bench.run.worker import describe
@@ -87,6 +88,7 @@ class SceneReady:
     """What preparing a scene gave: its adequacy rows, or why its reference failed."""
 
     scene: str
+    scene_key: str
     adequacy: list[dict[str, Any]]
     reference_error: str | None
     adequacy_error: str | None
@@ -108,11 +110,11 @@ def prepare_scene(scene: Scene, plugins: tuple[str, ...] = ()) -> SceneReady:
     try:
         reference_for(scene)
     except BaseException as error:  # noqa: BLE001 - reported, and the scene's runs become failed rows
-        return SceneReady(scene.name, [], f"reference failed: {describe(error)}", None)
+        return SceneReady(scene.name, scene_key(scene), [], f"reference failed: {describe(error)}", None)
     try:
-        return SceneReady(scene.name, list(model_adequacy(scene)), None, None)
+        return SceneReady(scene.name, scene_key(scene), list(model_adequacy(scene)), None, None)
     except BaseException as error:  # noqa: BLE001 - adequacy is a side table; the runs do not depend on it
-        return SceneReady(scene.name, [], None, f"model adequacy failed: {describe(error)}")
+        return SceneReady(scene.name, scene_key(scene), [], None, f"model adequacy failed: {describe(error)}")
 
 
 def base_row(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
@@ -122,6 +124,7 @@ def base_row(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
         run_key=spec.run_key,
         matrix_id=matrix_id,
         scene=spec.scene.name,
+        scene_key=scene_key(spec.scene),
         model=spec.scene.model,
         integrator=spec.integrator,
         kh=spec.kh,
@@ -242,7 +245,7 @@ def _estimated_cost(spec: RunSpec) -> tuple:
 
 def scene_failure(scene: Scene, plugins: tuple[str, ...], status: str, reason: str) -> SceneReady:
     """What preparing a scene gave when its worker died or its task failed."""
-    return SceneReady(scene.name, [], f"reference failed: {reason}", None)
+    return SceneReady(scene.name, scene_key(scene), [], f"reference failed: {reason}", None)
 
 
 def run_failure(spec: RunSpec, matrix_id: str, status: str, reason: str) -> dict[str, Any]:
@@ -313,12 +316,13 @@ def run_matrix(matrix: Matrix, store: ResultsStore, *, jobs: int = 1, executor: 
             raise
         todo = sorted((spec for spec in matrix.runs if spec.run_key not in stored), key=_estimated_cost)
         try:
-            needed = [scene for scene in matrix.scenes if any(spec.scene.name == scene.name for spec in todo)]
+            keys_to_run = {scene_key(spec.scene) for spec in todo}
+            needed = [scene for scene in matrix.scenes if scene_key(scene) in keys_to_run]
             broken = _prepare_scenes(executor, needed, matrix, store, matrix_id, progress)
             to_execute = []
             for spec in todo:
-                if spec.scene.name in broken:
-                    store.write_run(run_failure(spec, matrix_id, STATUS_FAILED, broken[spec.scene.name]))
+                if scene_key(spec.scene) in broken:
+                    store.write_run(run_failure(spec, matrix_id, STATUS_FAILED, broken[scene_key(spec.scene)]))
                 else:
                     to_execute.append(spec)
             _execute_runs(executor, to_execute, matrix, store, matrix_id, progress,
@@ -335,18 +339,18 @@ def run_matrix(matrix: Matrix, store: ResultsStore, *, jobs: int = 1, executor: 
 
 def _prepare_scenes(executor, scenes: list[Scene], matrix: Matrix, store: ResultsStore, matrix_id: str,
                     progress: bool) -> dict[str, str]:
-    """References and adequacy rows of every scene; returns {scene name: reason} for failed references."""
+    """References and adequacy rows of every scene; returns {scene key: reason} for failed references."""
     broken: dict[str, str] = {}
     results = executor.map_unordered(prepare_scene, [(scene, matrix.plugins) for scene in scenes], scene_failure,
                                      timeout_s=None)
     with tqdm(total=len(scenes), desc="references", unit="scene", disable=not progress, file=sys.stderr) as bar:
         for _, ready in results:
             if ready.reference_error:
-                broken[ready.scene] = ready.reference_error
+                broken[ready.scene_key] = ready.reference_error
                 bar.write(f"scene {ready.scene}: {ready.reference_error}")
             if ready.adequacy_error:
                 bar.write(f"scene {ready.scene}: {ready.adequacy_error}")
-            store.write_adequacy(matrix_id, ready.scene, ready.adequacy)
+            store.write_adequacy(matrix_id, ready.scene, ready.adequacy, scene_key=ready.scene_key)
             bar.update()
     return broken
 

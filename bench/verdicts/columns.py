@@ -52,6 +52,12 @@ NAN = math.nan
 # --- energy ------------------------------------------------------------------------------------------------------
 
 
+MIN_INTEGRATED_ROWS = 2
+"""Rows of the output grid a verdict needs: row 0 is the initial state, given and not integrated, so a run that
+diverged before the first output time (a step-0 divergence) has no data: its verdicts are NaN (stored NULL),
+never the 0 that comparing the initial state with itself would give."""
+
+
 def energy_scale(model: Model, params: PendulumParameters) -> tuple[float, float]:
     """(E₀, E_swing) in J/kg: the energy at release and the swing's energy above the bob at rest at the bottom."""
     p = params.parameter_vector()
@@ -68,6 +74,8 @@ def energy_verdicts(model: Model, params: PendulumParameters, solution: Solution
     the integrator does not stream it. For a model that conserves no energy (the seed's eqs. 4-5) the numbers mix the model's own drift with the integrator's (``energy_conserved`` = 0).
     """
     n = finite_prefix(solution.y)
+    if n < MIN_INTEGRATED_ROWS:  # only the initial state, which is given, not computed: no data
+        n = 0
     energy0, swing = energy_scale(model, params)
     p = params.parameter_vector()
     energy = model.numba_energy
@@ -75,6 +83,8 @@ def energy_verdicts(model: Model, params: PendulumParameters, solution: Solution
     relative = (values - energy0) / swing
     drift = least_squares_slope(solution.t[:n], relative) if n >= 2 else NAN
     streamed = solution.streamed.energy_max_rel_error if solution.streamed is not None else None
+    if solution.steps == 0:  # a max over no step (the loop starts it at 0): no data
+        streamed = None if streamed is None else NAN
     return {
         "energy_conserved": int(model.conserves_energy),
         "energy_max_rel_error": float(np.max(np.abs(relative))) if n else NAN,
@@ -87,9 +97,10 @@ def energy_verdicts(model: Model, params: PendulumParameters, solution: Solution
 
 
 def max_position_gap(y: np.ndarray, other: np.ndarray, amplitude_m: float) -> float:
-    """max over rows of |r − r_other| / A (positions are the first two columns); NaN if no row is finite."""
+    """max over rows of |r − r_other| / A (positions are the first two columns); NaN unless a row after the
+    initial state is finite (``MIN_INTEGRATED_ROWS``)."""
     n = min(finite_prefix(y), finite_prefix(other))
-    if n == 0:
+    if n < MIN_INTEGRATED_ROWS:
         return NAN
     gap = np.hypot(y[:n, 0] - other[:n, 0], y[:n, 1] - other[:n, 1])
     return float(np.max(gap)) / amplitude_m
@@ -124,7 +135,9 @@ def compute_verdicts(scene: "Scene", solution: Solution, reference: "Reference |
 
     * failed run: only ``energy_conserved`` (a property of the model); everything else NaN;
     * diverged run: energy and trajectory gaps over the grid up to the last finite row (lower bounds of what
-      the run did), precession NaN (the swing near a divergence is no longer a pendulum's);
+      the run did), precession NaN (the swing near a divergence is no longer a pendulum's); every verdict NaN
+      when no row after the initial state is finite, and the streamed energy error NaN when no step was taken
+      (``MIN_INTEGRATED_ROWS``: no data, not a perfect score);
     * ``analytic_gap_*`` only for a planar model released from rest: the closed forms assume the release, and
       for the spherical model the gap would measure the model (its finite-amplitude period), not the run;
       for the seed's eqs. 4-5, ``analytic_gap_seed`` is the comparison the seed itself makes (its §4);
