@@ -169,7 +169,7 @@ class Sweep:
         integrator, family: identity; ``adaptive`` is true for a tolerance sweep.
         points: ok runs with a finite, positive x and y, ordered along the sweep (coarse to fine).
         no_value: ok runs without a plottable x or y (drawn on the bottom edge).
-        diverged, failed: runs with that status (drawn on the top edge at their x).
+        diverged: runs that diverged; failed: runs that failed or timed out (drawn on the top edge at their x).
     """
 
     integrator: str
@@ -183,8 +183,8 @@ class Sweep:
     @property
     def label(self) -> str:
         """The integrator with its counts of diverged and failed runs."""
-        counts = [f"{len(rows)} {status}" for status, rows in
-                  ((STATUS_DIVERGED, self.diverged), (STATUS_FAILED, self.failed)) if len(rows)]
+        statuses = pd.concat([self.diverged["status"], self.failed["status"]]).value_counts(sort=False)
+        counts = [f"{count} {status}" for status, count in statuses.items()]
         return self.integrator + (f" ({', '.join(counts)})" if counts else "")
 
 
@@ -202,7 +202,8 @@ def sweeps(frame: pd.DataFrame, x_column: str, y_column: str) -> list[Sweep]:
         points = ok[plottable].assign(**{y_column: y[plottable]})
         points = points.assign(_along=-points["kh"].fillna(points["tol"])).sort_values("_along", kind="stable")
         found.append(Sweep(integrator, family, adaptive, points.drop(columns="_along"), ok[~plottable],
-                           rows[rows["status"] == STATUS_DIVERGED], rows[rows["status"] == STATUS_FAILED]))
+                           rows[rows["status"] == STATUS_DIVERGED],
+                           rows[~rows["status"].isin((STATUS_OK, STATUS_DIVERGED))]))
     return found
 
 

@@ -19,15 +19,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import plotly.graph_objects as go
-from matplotlib.colors import to_hex
-from matplotlib.figure import Figure as MplFigure
 from matplotlib.collections import PolyCollection
+from matplotlib.colors import to_hex
 from matplotlib.container import ErrorbarContainer
+from matplotlib.figure import Figure as MplFigure
 from matplotlib.ticker import FixedLocator
 from plotly.subplots import make_subplots
 
-from foucault_bench.bench.schema import setting_label
-from foucault_bench.integrators import STATUS_DIVERGED, STATUS_OK
+from foucault_bench.bench.schema import STATUS_TIMEOUT, setting_label
+from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
 from foucault_bench.reports import charts
 
 PLOTLY_JS = "plotly.min.js"
@@ -91,11 +91,13 @@ def _family_entry(family: str, colour: str) -> go.Scatter:
 
 def add_sweeps(figure: go.Figure, frame: pd.DataFrame, x_column: str, y_column: str, *, row: int = 1, col: int = 1,
                legend: bool = True, x_spread: str | None = None, top: float | None = None) -> None:
-    """One trace per integrator through its ok runs (``charts.sweeps``) and, above the data at ``top``, one per
-    integrator for its diverged and failed runs: at their x, or left of every run's x when theirs is unknown
-    (``_left``; as the static charts put them on the left edge)."""
+    """One trace per integrator through its ok runs (``charts.sweeps``) and, when ``top`` is given, as the static
+    charts draw them on their edges: one per integrator for its diverged and failed runs above the data at
+    ``top`` (▲, ✕; "<integrator> not ok") and one for its ok runs without a plottable value below the data
+    (▽, ``_bottom``; "<integrator> no value"), each at its x, or left of every run's x when that is unknown
+    (``_left``)."""
     families_seen: set[str] = set()
-    left, left_slots = _left(frame, x_column), 0
+    left, left_slots = _left(frame, x_column), {"not ok": 0, "no value": 0}
     for sweep in charts.sweeps(frame, x_column, y_column):
         style = charts.integrator_style(sweep.integrator, sweep.family, sweep.adaptive)
         if legend and sweep.family not in families_seen:
@@ -114,18 +116,23 @@ def add_sweeps(figure: go.Figure, frame: pd.DataFrame, x_column: str, y_column: 
             line={"color": style["color"], "dash": _dash(style["linestyle"]), "width": 1.5},
             marker={"symbol": SYMBOLS.get(style["marker"], "circle"), "size": 7, "color": style["color"]},
             customdata=_hover(points, y_column), hovertemplate=RUN_HOVER), row=row, col=col)
-        not_ok = pd.concat([sweep.diverged, sweep.failed])
-        if top is not None and not not_ok.empty:
-            x = not_ok[x_column].to_numpy(dtype=float)
+        if top is None:
+            continue
+        for edge_rows, edge_y, name in ((pd.concat([sweep.diverged, sweep.failed]), top, "not ok"),
+                                        (sweep.no_value, _bottom(frame, y_column), "no value")):
+            if edge_rows.empty:
+                continue
+            x = edge_rows[x_column].to_numpy(dtype=float, copy=True)
             unknown = ~(np.isfinite(x) & (x > 0))
-            x[unknown] = left * LEFT_EDGE_STEP ** (left_slots + np.arange(int(unknown.sum())))
-            left_slots += int(unknown.sum())
-            symbols = ["triangle-up" if status == STATUS_DIVERGED else "x" for status in not_ok["status"]]
+            x[unknown] = left * LEFT_EDGE_STEP ** (left_slots[name] + np.arange(int(unknown.sum())))
+            left_slots[name] += int(unknown.sum())
+            symbols = [EDGE_SYMBOLS.get(status, "triangle-down") if name == "not ok" else "triangle-down"
+                       for status in edge_rows["status"]]
             figure.add_trace(go.Scatter(
-                x=x, y=np.full(len(not_ok), top), mode="markers", name=f"{sweep.integrator} not ok",
+                x=x, y=np.full(len(edge_rows), edge_y), mode="markers", name=f"{sweep.integrator} {name}",
                 legendgroup=sweep.family, showlegend=False,
                 marker={"symbol": symbols, "size": 9, "color": style["color"], "line": {"width": 1, "color": "black"}},
-                customdata=_hover(not_ok, y_column), hovertemplate=RUN_HOVER), row=row, col=col)
+                customdata=_hover(edge_rows, y_column), hovertemplate=RUN_HOVER), row=row, col=col)
 
 
 LEFT_EDGE_STEP = 0.8
@@ -137,6 +144,17 @@ def _left(frame: pd.DataFrame, column: str) -> float:
     values = frame[column].to_numpy(dtype=float)
     values = values[np.isfinite(values) & (values > 0)]
     return float(values.min() * 0.5) if values.size else 1.0
+
+
+EDGE_SYMBOLS = {STATUS_DIVERGED: "triangle-up", STATUS_FAILED: "x", STATUS_TIMEOUT: "x"}
+"""Run status → plotly symbol of its marker above the data (``charts.DIVERGED_MARKER``, ``FAILED_MARKER``)."""
+
+
+def _bottom(frame: pd.DataFrame, column: str) -> float:
+    """A y below every plotted value (÷10 the smallest), where ok runs without a plottable value are drawn."""
+    values = np.abs(frame.loc[frame["status"] == STATUS_OK, column].to_numpy(float))
+    values = values[np.isfinite(values) & (values > 0)]
+    return float(values.min() / 10.0) if values.size else 0.1
 
 
 def _top(frame: pd.DataFrame, column: str) -> float | None:

@@ -21,11 +21,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from matplotlib.collections import LineCollection, PolyCollection
-from matplotlib.lines import Line2D
-from matplotlib.patches import Polygon, Rectangle
 
-from report_fixture import INLINE_SCENE, fixture_database, fixture_report  # noqa: F401 - pytest fixtures
+from report_fixture import INLINE_SCENE
 
 VERDICT_WORDS = {"reference_error": "reference error", "energy_max_rel_error": "energy error",
                  "energy_drift_per_s": "energy drift", "precession_rate_ref_error": "precession-rate error",
@@ -57,6 +54,7 @@ class Chart:
     stem: str
     caption: str
     figure: dict
+    chart_id: str = ""
 
     @property
     def title(self) -> str:
@@ -76,14 +74,20 @@ def page_charts(folder: Path) -> dict[str, Chart]:
         data = re.search(r"var figure = (.*?); Plotly\.newPlot", block, re.S)
         stem = re.search(r"href='(figures/[^']+)\.png'", block).group(1)
         caption = re.search(r"<figcaption>(.*?) \(static:", block, re.S).group(1)
-        assert data is not None, f"{stem}: not interactive"
-        found[stem] = Chart(stem, caption, json.loads(data.group(1)))
+        chart_id = re.search(r"<div class='chart' id='([^']+)'", block)
+        assert data is not None and chart_id is not None, f"{stem}: not interactive"
+        found[stem] = Chart(stem, caption, json.loads(data.group(1)), chart_id.group(1))
     return found
+
+
+def integrator_of(trace: dict) -> str:
+    """The integrator a trace is named after ("rk4 (1 diverged), fitted order 4.00" → rk4)."""
+    return re.split(r"[ ,]", trace["name"], maxsplit=1)[0]
 
 
 def points(trace: dict) -> set[tuple[float, float]]:
     x, y = decode(trace.get("x")), decode(trace.get("y"))
-    return {(float(a), float(b)) for a, b in zip(x, y)}
+    return {(float(a), float(b)) for a, b in zip(x, y, strict=True)}
 
 
 def same_points(drawn: set[tuple[float, float]], expected: set[tuple[float, float]]) -> bool:
@@ -128,7 +132,7 @@ def plottable(frame: pd.DataFrame, x: str, y: str) -> pd.DataFrame:
 
 
 def pairs(frame: pd.DataFrame, x: str, y: str) -> set[tuple[float, float]]:
-    return {(float(a), abs(float(b))) for a, b in zip(frame[x], frame[y])}
+    return {(float(a), abs(float(b))) for a, b in zip(frame[x], frame[y], strict=True)}
 
 
 def metric_applies(frame: pd.DataFrame, verdict: str) -> pd.Series:
@@ -179,12 +183,12 @@ def test_work_precision_charts_show_their_scene_and_verdict(charts: dict[str, Ch
             assert chart.caption.startswith(f"{scene}: {words} ("), (chart.stem, chart.caption)
             titles.add(chart.title)
             traces = chart.traces()
-            drawn_integrators = {trace["name"].split(" (")[0] for trace in traces
+            drawn_integrators = {integrator_of(trace) for trace in traces
                                  if trace.get("mode") == "lines+markers"}
             assert drawn_integrators == set(plottable(scene_rows, "cpu_time_s", verdict)["integrator"]), chart.stem
             for integrator, runs in scene_rows.groupby("integrator"):
                 lines = [trace for trace in traces if trace.get("mode") == "lines+markers"
-                         and trace["name"].split(" (")[0] == integrator]
+                         and integrator_of(trace) == integrator]
                 by_axis = {trace.get("xaxis", "x"): trace for trace in lines}
                 for axis, cost in (("x", "cpu_time_s"), ("x2", "steps")):
                     expected = pairs(plottable(runs, cost, verdict), cost, verdict)
@@ -213,8 +217,9 @@ def test_the_pareto_trace_is_the_non_dominated_set(charts: dict[str, Chart], row
 
 def test_diverged_and_failed_runs_are_drawn_above_the_data(charts: dict[str, Chart], rows: pd.DataFrame) -> None:
     """Every run that diverged or failed is a marker of its integrator's "not ok" trace on both cost panels:
-    at its cost when it has one, else left of every other point, and above every plotted value."""
-    checked = 0
+    at its cost when it has one, else left of every other point, and above every plotted value; every ok run
+    without a value is a marker of its integrator's "no value" trace below every plotted value."""
+    checked = no_values = 0
     for scene, scene_rows in rows.groupby("scene"):
         for verdict in VERDICT_WORDS:
             chart = charts[f"figures/work_precision_{stem_part(scene)}_{verdict}"]
@@ -234,12 +239,22 @@ def test_diverged_and_failed_runs_are_drawn_above_the_data(charts: dict[str, Cha
                     assert len(x) == len(not_ok), (chart.stem, integrator, axis, x)
                     known = not_ok[cost].astype(float)
                     known = known[np.isfinite(known) & (known > 0)].to_numpy()
-                    assert np.allclose(np.sort(x[:len(known)] if False else x[np.isin(x, known)]), np.sort(known),
-                                       rtol=RELATIVE_TOLERANCE), (chart.stem, integrator, axis)
+                    assert np.allclose(np.sort(x[np.isin(x, known)]), np.sort(known), rtol=RELATIVE_TOLERANCE), (
+                        chart.stem, integrator, axis)
                     assert np.all(x[~np.isin(x, known)] < data_x.min()), (chart.stem, integrator, axis)
                     assert np.all(y > data_y.max()), (chart.stem, integrator, axis)
                     checked += len(not_ok)
+                for integrator, runs in scene_rows[scene_rows["status"] == "ok"].groupby("integrator"):
+                    values = runs[verdict].astype(float).abs()
+                    no_value = runs[~(np.isfinite(values) & (values > 0))]
+                    drawn = [t for t in on_axis if t["name"] == f"{integrator} no value"]
+                    assert len(drawn) == (0 if no_value.empty else 1), (chart.stem, integrator, axis)
+                    if drawn:
+                        assert sorted(decode(drawn[0]["x"])) == pytest.approx(sorted(no_value[cost].astype(float)))
+                        assert np.all(decode(drawn[0]["y"]) < data_y.min()), (chart.stem, integrator)
+                        no_values += len(no_value)
     assert checked == 2 * len(VERDICT_WORDS) * int((rows["status"] != "ok").sum())
+    assert no_values > 0  # the fixture has an ok run without a value: the check above ran
 
 
 def test_convergence_charts_show_each_scenes_fixed_step_runs(charts: dict[str, Chart], rows: pd.DataFrame) -> None:
@@ -249,7 +264,7 @@ def test_convergence_charts_show_each_scenes_fixed_step_runs(charts: dict[str, C
         fixed = scene_rows[scene_rows["tol"].isna()]
         traces = chart.traces()
         for integrator, runs in fixed.groupby("integrator"):
-            lines = [t for t in traces if t.get("mode") == "lines+markers" and t["name"].split(" (")[0] == integrator]
+            lines = [t for t in traces if t.get("mode") == "lines+markers" and integrator_of(t) == integrator]
             expected = pairs(plottable(runs, "kh", "reference_error"), "kh", "reference_error")
             assert len(lines) == (1 if expected else 0) and same_points(points(lines[0]), expected), (scene, integrator)
             not_ok = runs[runs["status"] != "ok"]
@@ -257,8 +272,7 @@ def test_convergence_charts_show_each_scenes_fixed_step_runs(charts: dict[str, C
             assert sorted(decode(drawn[0]["x"]) if drawn else []) == pytest.approx(sorted(not_ok["kh"])), integrator
         assert {t["name"] for t in traces if t["name"].startswith("slope ")} == {
             f"slope {order}" for order in fixed["declared_order"].dropna().astype(int).unique()}
-        assert not set(scene_rows.loc[scene_rows["tol"].notna(), "integrator"]) & {
-            t["name"].split(" (")[0].split(",")[0] for t in traces}
+        assert not set(scene_rows.loc[scene_rows["tol"].notna(), "integrator"]) & {integrator_of(t) for t in traces}
 
 
 def test_tolerance_charts_show_each_scenes_adaptive_runs(charts: dict[str, Chart], rows: pd.DataFrame) -> None:
@@ -268,7 +282,7 @@ def test_tolerance_charts_show_each_scenes_adaptive_runs(charts: dict[str, Chart
         adaptive = scene_rows[scene_rows["tol"].notna()]
         traces = chart.traces()
         for integrator, runs in adaptive.groupby("integrator"):
-            lines = [t for t in traces if t.get("mode") == "lines+markers" and t["name"].split(" (")[0] == integrator]
+            lines = [t for t in traces if t.get("mode") == "lines+markers" and integrator_of(t) == integrator]
             expected = pairs(plottable(runs, "tol", "reference_error"), "tol", "reference_error")
             assert len(lines) == 1 and same_points(points(lines[0]), expected), (scene, integrator)
             drawn = [t for t in traces if t["name"] == f"{integrator} not ok"]
@@ -294,12 +308,13 @@ def test_adequacy_chart_labels_rows_and_keeps_measured_dots_visible(charts: dict
     assert list(decode(layout["yaxis"]["tickvals"])) == list(range(len(labels)))
     measured = [t for t in chart.traces() if t["name"] == "measured"]
     expected = [t for t in chart.traces() if t["name"].startswith("leading-order")]
-    for trace, column in zip(measured, ("precession_rate_diff", "trajectory_gap")):
+    for trace, column in zip(measured, ("precession_rate_diff", "trajectory_gap"), strict=True):
         assert same_points(points(trace), {(abs(v), float(i)) for i, v in enumerate(adequacy_rows[column])})
-    for trace in expected:  # hollow and beneath the measured dots
+    assert len(measured) == 2 and expected
+    for trace in expected:  # hollow and drawn before (beneath) the measured dots of its panel
         assert trace["marker"]["symbol"].endswith("-open"), trace["marker"]
-    order = [t["name"] for t in chart.traces()]
-    assert all(order.index(t["name"]) < order.index("measured") for t in expected)
+        panel = [t for t in chart.traces() if t.get("xaxis", "x") == trace.get("xaxis", "x")]
+        assert panel.index(trace) < min(panel.index(t) for t in measured if t in panel)
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -448,3 +463,86 @@ def test_adequacy_chart_keeps_every_element(charts: dict[str, Chart], adequacy_r
 
     assert_static_elements_are_interactive(static_charts.adequacy(adequacy_rows),
                                            charts["figures/model_adequacy"].figure, "model_adequacy")
+
+
+def _interval_set(trace: dict, key: str, axis: str) -> set[tuple[float, float]]:
+    """(low, high) of each error bar of a trace along ``axis`` ("x" or "y")."""
+    centre = decode(trace[axis])
+    plus, minus = decode(trace[key]["array"]), decode(trace[key].get("arrayminus", trace[key]["array"]))
+    return {(round(float(c - m), 15), round(float(c + p), 15)) for c, p, m in zip(centre, plus, minus, strict=True)}
+
+
+def assert_result_chart_elements_are_interactive(static, interactive: dict, name: str) -> None:
+    """A chart of results rows (``reports.charts``): each data line of the static figure (integrator sweeps,
+    Pareto staircase, reference slopes, diagonal) is a trace of the same points and marker on the same panel,
+    each error bar spans the same interval, and each marker on an edge (▲ diverged, ✕ failed, ▽ no value) is
+    a marker of the same symbol, at the same x where the static chart knows it. The setting written at the end of
+    each static line is in the interactive version's hover text of that point."""
+    traces = interactive["data"]
+    for index, axes in enumerate(_panels(static), start=1):
+        x_ref, _ = _refs(index)
+        here = [t for t in traces if t.get("xaxis", "x") == x_ref and t.get("meta") != "family-toggle"]
+        edge_counts: dict[str, int] = {}
+        edge_x: dict[str, list[float]] = {}
+        caps = {id(cap) for container in axes.containers for cap in container.lines[1]}  # ends of error bars
+        for line in axes.get_lines():
+            if id(line) in caps:
+                continue
+            x, y = np.asarray(line.get_xdata(), dtype=float), np.asarray(line.get_ydata(), dtype=float)
+            where = f"{name} panel {index} {line.get_label()!r}"
+            if line.get_transform() == axes.transData:
+                if not len(x):
+                    continue
+                expected = {(float(a), float(b)) for a, b in zip(x, y, strict=True)}
+                found = [t for t in here if same_points(points(t), expected)]
+                assert found, where
+                if not str(line.get_label()).startswith("_") and line.get_marker() not in (None, "None", ""):
+                    assert integrator_of(found[0]) == re.split(r"[ ,]", str(line.get_label()))[0], where
+                    assert found[0]["marker"]["symbol"] == MATPLOTLIB_SYMBOLS[line.get_marker()], where
+                continue
+            symbol = MATPLOTLIB_SYMBOLS[line.get_marker()]
+            edge_counts[symbol] = edge_counts.get(symbol, 0) + len(x)
+            if line.get_transform() == axes.get_xaxis_transform():
+                edge_x.setdefault(symbol, []).extend(x)
+        drawn_counts: dict[str, int] = {}
+        drawn_x: dict[str, list[float]] = {}
+        for trace in here:
+            if trace["name"].endswith((" not ok", " no value")):
+                symbols = trace["marker"]["symbol"]
+                symbols = symbols if isinstance(symbols, list) else [symbols] * len(decode(trace["x"]))
+                for symbol, value in zip(symbols, decode(trace["x"]), strict=True):
+                    drawn_counts[symbol] = drawn_counts.get(symbol, 0) + 1
+                    drawn_x.setdefault(symbol, []).append(value)
+        assert drawn_counts == edge_counts, (name, index, drawn_counts, edge_counts)
+        for symbol, values in edge_x.items():
+            assert all(any(math.isclose(v, w, rel_tol=RELATIVE_TOLERANCE) for w in drawn_x[symbol]) for v in values)
+        static_bars = set()
+        for collection in axes.collections:
+            for segment in collection.get_segments():
+                segment = np.asarray(segment, dtype=float)
+                static_bars.add((round(float(segment[:, 0].min()), 15), round(float(segment[:, 0].max()), 15)))
+        drawn_bars = set().union(*[_interval_set(t, "error_x", "x") for t in here if t.get("error_x")])
+        assert len(drawn_bars) == len(static_bars) and all(
+            any(math.isclose(a, c, rel_tol=1e-9) and math.isclose(b, d, rel_tol=1e-9) for c, d in drawn_bars)
+            for a, b in static_bars), (name, index)
+        hover = {str(cell) for t in here for row in (t.get("customdata") or []) for cell in row}
+        for text in axes.texts:
+            if text.get_text().startswith(("kh=", "tol=")):
+                assert text.get_text() in hover, (name, index, text.get_text())
+
+
+def test_result_charts_keep_every_static_element(charts: dict[str, Chart], rows: pd.DataFrame) -> None:
+    from foucault_bench.bench.verdicts.pareto import pareto_front
+    from foucault_bench.reports import charts as static_charts
+    from foucault_bench.reports.tables import convergence_orders, orders_by_integrator
+
+    orders = convergence_orders(rows)
+    for scene, scene_rows in rows.groupby("scene"):
+        for verdict in VERDICT_WORDS:
+            figure = static_charts.work_precision_figure(scene_rows, verdict, pareto_front(scene_rows, verdict))
+            stem = f"figures/work_precision_{stem_part(scene)}_{verdict}"
+            assert_result_chart_elements_are_interactive(figure, charts[stem].figure, stem)
+        figure = static_charts.convergence_figure(scene_rows, orders_by_integrator(orders, scene))
+        assert_result_chart_elements_are_interactive(figure, charts[f"figures/convergence_{scene}"].figure, scene)
+        figure = static_charts.tolerance_figure(scene_rows)
+        assert_result_chart_elements_are_interactive(figure, charts[f"figures/tolerance_{scene}"].figure, scene)
