@@ -254,7 +254,7 @@ def _front_words(scene_runs: pd.DataFrame, verdict: str, front: pd.DataFrame) ->
     metric = ERROR_METRICS[verdict]
     models = sorted(model for model in scene_runs["model"].dropna().unique() if not metric.applies(model))
     if models:
-        return f"no Pareto front: {metric.why_not} (the {', '.join(models)} model)"
+        return f"no Pareto front for the {', '.join(models)} model ({metric.why_not})"
     return f"no Pareto front: no ok run has both a cost and a finite {metric.title}"
 
 

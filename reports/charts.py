@@ -6,9 +6,10 @@ Conventions shared by every chart:
 * colour = integrator family (``family_colour``, the same in every chart and report), marker and line
   pattern = integrator within its family, solid-type lines = fixed-step sweeps (k·h), dashed-type lines =
   tolerance sweeps;
-* runs that diverged or failed are never dropped: they are drawn as a marker on the top edge of the axes at
-  their cost (▲ diverged, ✕ failed; at the left edge when the cost is unknown); an ok run without a finite,
-  positive value is drawn on the bottom edge (▽);
+* runs that diverged, failed or timed out are never dropped: they are drawn as a marker on the top edge of the
+  axes at their cost (▲ diverged, ✕ failed or timed out; at the left edge when the cost is unknown); an ok run
+  without a finite, positive value is drawn on the bottom edge (▽); the interactive charts draw the same
+  markers above and below their data;
 * log axes wherever values span decades; axis labels carry units;
 * work-precision charts: cost = CPU time where the results have it, else wall time
   (``bench.verdicts.pareto.cost_column``), the spread of the timed repeats as horizontal bars, the Pareto
@@ -439,7 +440,7 @@ def stability(table: pd.DataFrame) -> Figure:
     figure = Figure(figsize=(12, 3.6 * rows_of_panels + 0.8), layout="constrained")
     # y not shared: a panel whose runs all diverge (explicit Euler) would impose its placeholder limits on all
     panels = np.atleast_1d(figure.subplots(rows_of_panels, columns, sharex=True, squeeze=False)).ravel()
-    for axes, (integrator, family) in zip(panels, integrators, strict=False):
+    for axes, (integrator, family) in zip(panels, integrators, strict=False):  # spare panels: hidden below
         style = integrator_style(integrator, family)
         for rotation, linestyle in ((False, "-"), (True, "--")):
             rows = table[(table["integrator"] == integrator) & (table["rotation"] == rotation)].sort_values("kh")

@@ -546,3 +546,23 @@ def test_result_charts_keep_every_static_element(charts: dict[str, Chart], rows:
         assert_result_chart_elements_are_interactive(figure, charts[f"figures/convergence_{scene}"].figure, scene)
         figure = static_charts.tolerance_figure(scene_rows)
         assert_result_chart_elements_are_interactive(figure, charts[f"figures/tolerance_{scene}"].figure, scene)
+
+
+def test_hover_texts_name_each_run_with_the_digits_the_tables_use(charts: dict[str, Chart], rows: pd.DataFrame) -> None:
+    """Each point's hover text is its run's: the setting with 4 significant digits (kh=0.2712, as tables print
+    it) and counts in full (3600 steps, not 3.6e+03)."""
+    checked = 0
+    for scene, scene_rows in rows.groupby("scene"):
+        chart = charts[f"figures/work_precision_{stem_part(scene)}_reference_error"]
+        for trace in chart.traces():
+            if trace.get("mode") != "lines+markers" or trace.get("xaxis", "x") != "x":
+                continue
+            runs = plottable(scene_rows[scene_rows["integrator"] == integrator_of(trace)], "cpu_time_s",
+                             "reference_error")
+            for x, hover in zip(decode(trace["x"]), trace["customdata"], strict=True):
+                run = runs[np.isclose(runs["cpu_time_s"], x, rtol=RELATIVE_TOLERANCE)].iloc[0]
+                setting = f"tol={run['tol']:g}" if pd.notna(run["tol"]) else f"kh={run['kh']:.4g}"
+                assert hover[0] == run["integrator"] and hover[2] == setting, (hover, setting)
+                assert hover[6] == str(int(run["nfev"])) and hover[7] == str(int(run["steps"])), hover
+                checked += 1
+    assert checked == int(((rows["status"] == "ok") & rows["reference_error"].notna()).sum())
