@@ -235,7 +235,8 @@ def _ticks(axis) -> dict[str, Any]:
     if not isinstance(axis.get_major_locator(), FixedLocator):
         return {}
     positions = [float(value) for value in axis.get_majorticklocs()]
-    return {"tickvals": positions, "ticktext": [str(text) for text in axis.get_major_formatter().format_ticks(positions)]}
+    labels = axis.get_major_formatter().format_ticks(positions)
+    return {"tickvals": positions, "ticktext": [str(text) for text in labels]}
 
 
 def _data_coordinates(axes, transform, xy: np.ndarray) -> np.ndarray:

@@ -125,7 +125,8 @@ PROBE = """<script>
 window.addEventListener('load', function () { setTimeout(function () {
   function plain(key, value) { return ArrayBuffer.isView(value) ? Array.from(value) : value; }
   function picked(trace) {
-    var error = trace.error_x && trace.error_x.visible ? {array: trace.error_x.array, arrayminus: trace.error_x.arrayminus} : null;
+    var error = trace.error_x && trace.error_x.visible
+      ? {array: trace.error_x.array, arrayminus: trace.error_x.arrayminus} : null;
     return {name: trace.name, mode: trace.mode, meta: trace.meta, xaxis: trace.xaxis, yaxis: trace.yaxis, x: trace.x,
             y: trace.y, marker: {symbol: trace.marker ? trace.marker.symbol : null}, error_x: error,
             customdata: trace.customdata};

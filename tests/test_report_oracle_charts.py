@@ -427,7 +427,8 @@ def synthetic_study_tables() -> dict[str, pd.DataFrame]:
         for rotation in (False, True)
         for kh, status, error in ((0.5, "ok", 1e-3), (1.5, "ok", 4e-2), (3.0, "diverged", math.nan))])
     precession = pd.DataFrame({"latitude_deg": [-60.0, 0.0, 30.0, 60.0], "textbook_rate_rad_s": [6e-5, 0, -3e-5, -6e-5],
-                               "rate_rad_s": [6.1e-5, 1e-7, -2.9e-5, -6.2e-5], "airy_rate_rad_s": [6.05e-5, 0, -3e-5, -6.05e-5],
+                               "rate_rad_s": [6.1e-5, 1e-7, -2.9e-5, -6.2e-5],
+                               "airy_rate_rad_s": [6.05e-5, 0, -3e-5, -6.05e-5],
                                "rate_stderr_rad_s": [1e-7, 2e-7, 1e-7, 3e-7], **config})
     azimuth = pd.DataFrame([{"latitude_deg": lat, "integrator": name, "family": family, "release_azimuth_deg": az,
                              "status": "ok", "error_earth": 1e-3 * (1 + az / 90) * (lat / 30), "kh": 0.1, **config}
@@ -435,7 +436,8 @@ def synthetic_study_tables() -> dict[str, pd.DataFrame]:
                             for az in (0.0, 45.0, 90.0)])
     energy = pd.DataFrame([{"integrator": name, "family": family, "status": status, "t_s": t, "setting": "kh=0.2",
                             "energy_rel_error": value, **config}
-                           for name, family, status in (("verlet", "verlet", "ok"), ("explicit_euler", "euler", "diverged"))
+                           for name, family, status in (("verlet", "verlet", "ok"),
+                                                        ("explicit_euler", "euler", "diverged"))
                            for t, value in ((10.0, 1e-4), (100.0, 2e-4 if name == "verlet" else 1e2),
                                             (1000.0, 1.5e-4 if name == "verlet" else math.nan))])
     return {"stability": stability, "precession": precession, "azimuth": azimuth, "energy": energy}
@@ -566,3 +568,11 @@ def test_hover_texts_name_each_run_with_the_digits_the_tables_use(charts: dict[s
                 assert hover[6] == str(int(run["nfev"])) and hover[7] == str(int(run["steps"])), hover
                 checked += 1
     assert checked == int(((rows["status"] == "ok") & rows["reference_error"].notna()).sum())
+
+
+def test_the_overview_says_where_runs_without_a_value_are_drawn(fixture_report: Path) -> None:
+    """The reading guide describes what ``test_diverged_and_failed_runs_are_drawn_above_the_data`` checks."""
+    html = (fixture_report / "index.html").read_text(encoding="utf-8")
+    guide = re.search(r"How to read the charts:(.*?)</p>", html, re.S).group(1)
+    assert "drawn above the data at their cost, or at the left edge when the cost is unknown" in guide
+    assert "drawn below the data (▽" in guide
