@@ -23,6 +23,7 @@ import os
 import sys
 import time
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
@@ -35,6 +36,7 @@ from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.schema import COLUMN_NAMES
 from foucault_bench.bench.verdicts.pareto import (
     DEFAULT_TARGETS,
+    ERROR_METRICS,
     cost_column,
     pareto_front,
 )
@@ -140,7 +142,7 @@ class _Builder:
     def curves(self, name: str, caption: str, figure: MplFigure) -> None:
         """A chart of curves drawn with matplotlib: saved under figures/, and on the page converted to plotly
         (``interactive.from_matplotlib``)."""
-        self.figure(name, caption, lambda stem: charts.save(figure, stem), lambda: interactive.from_matplotlib(figure))
+        self.figure(name, caption, partial(charts.save, figure), partial(interactive.from_matplotlib, figure))
 
     def draw_figures(self) -> None:
         """Draw the collected figures, with a counter that knows the total (and so shows an ETA)."""
@@ -177,10 +179,10 @@ def _overview(builder: _Builder, inputs: ReportInputs) -> None:
         "integrator within its family, solid-type lines = fixed-step sweeps (k·h), dashed-type lines = tolerance "
         f"sweeps. Cost is {_cost_words(runs)}; the bars across a point span the spread (max − min) of the "
         "timed repeats. The thick grey staircase is the Pareto front: the runs no other run beats on both cost "
-        "and error. Runs that diverged (▲) or failed (✕) are drawn above the data at their cost (static charts: "
-        "on the top edge; left edge when the cost is unknown); an ok run without a finite positive value is "
-        "drawn on the bottom edge (▽) of the static charts. In this page, hovering a point shows its run "
-        "(integrator, family, setting, error, CPU and wall time, evaluations, steps, status), clicking a legend "
+        "and error. Runs that diverged (▲) or failed (✕) are drawn above the data at their cost, or at the left "
+        "edge when the cost is unknown (static charts: on the top edge); an ok run without a finite positive value "
+        "is drawn below the data (▽; static charts: on the bottom edge). In this page, hovering a point shows its "
+        "run (integrator, family, setting, error, CPU and wall time, evaluations, steps, status), clicking a legend "
         "entry hides that integrator and clicking 'all <family>' hides the family (double click: show only "
         "that entry); the static PNG and SVG files for papers are linked under each chart. "
         "Errors are dimensionless: positions relative to the amplitude A, energies relative to the swing's "
@@ -243,10 +245,21 @@ def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
                 continue
             front = pareto_front(scene_runs, verdict)
             builder.figure(f"work_precision_{file_stem(scene)}_{verdict}",
-                           f"{scene}: {title} ({label}) against time and accepted steps; grey "
-                           f"staircase: Pareto front ({len(front)} runs).",
-                           lambda stem: charts.work_precision(scene_runs, verdict, front, stem),
-                           lambda: interactive.work_precision(scene_runs, verdict, front))
+                           f"{scene}: {title} ({label}) against time and accepted steps; "
+                           f"{_front_words(scene_runs, verdict, front)}.",
+                           partial(charts.work_precision, scene_runs, verdict, front),
+                           partial(interactive.work_precision, scene_runs, verdict, front))
+
+
+def _front_words(scene_runs: pd.DataFrame, verdict: str, front: pd.DataFrame) -> str:
+    """What a work-precision caption says of the Pareto front: its size, or why there is none."""
+    if not front.empty:
+        return f"grey staircase: Pareto front ({len(front)} runs)"
+    metric = ERROR_METRICS[verdict]
+    models = sorted(model for model in scene_runs["model"].dropna().unique() if not metric.applies(model))
+    if models:
+        return f"no Pareto front for the {', '.join(models)} model ({metric.why_not})"
+    return f"no Pareto front: no ok run has both a cost and a finite {metric.title}"
 
 
 COST_BASIS_MEANING = {
@@ -286,8 +299,8 @@ def _convergence(builder: _Builder, runs: pd.DataFrame) -> None:
             scene_orders = tables.orders_by_integrator(orders, scene)
             builder.figure(f"convergence_{file_stem(scene)}",
                            f"{scene}: reference error against k·h, fitted order in the legend.",
-                           lambda stem: charts.convergence(scene_runs, scene_orders, stem),
-                           lambda: interactive.convergence(scene_runs, scene_orders))
+                           partial(charts.convergence, scene_runs, scene_orders),
+                           partial(interactive.convergence, scene_runs, scene_orders))
     builder.add(Heading("Tolerance against achieved error"), Paragraph(
         "For the adaptive integrators, the reference error reached against the tolerance asked for: a line "
         "below the dotted diagonal delivers more than asked, above it less. Libraries map a tolerance to their "
@@ -296,8 +309,8 @@ def _convergence(builder: _Builder, runs: pd.DataFrame) -> None:
         if scene_runs["tol"].notna().any():
             builder.figure(f"tolerance_{file_stem(scene)}",
                            f"{scene}: reference error against requested tolerance (adaptive integrators).",
-                           lambda stem: charts.tolerance(scene_runs, stem),
-                           lambda: interactive.tolerance(scene_runs))
+                           partial(charts.tolerance, scene_runs),
+                           partial(interactive.tolerance, scene_runs))
 
 
 def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:

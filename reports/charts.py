@@ -6,9 +6,10 @@ Conventions shared by every chart:
 * colour = integrator family (``family_colour``, the same in every chart and report), marker and line
   pattern = integrator within its family, solid-type lines = fixed-step sweeps (k·h), dashed-type lines =
   tolerance sweeps;
-* runs that diverged or failed are never dropped: they are drawn as a marker on the top edge of the axes at
-  their cost (▲ diverged, ✕ failed; at the left edge when the cost is unknown); an ok run without a finite,
-  positive value is drawn on the bottom edge (▽);
+* runs that diverged, failed or timed out are never dropped: they are drawn as a marker on the top edge of the
+  axes at their cost (▲ diverged, ✕ failed or timed out; at the left edge when the cost is unknown); an ok run
+  without a finite, positive value is drawn on the bottom edge (▽); the interactive charts draw the same
+  markers above and below their data;
 * log axes wherever values span decades; axis labels carry units;
 * work-precision charts: cost = CPU time where the results have it, else wall time
   (``bench.verdicts.pareto.cost_column``), the spread of the timed repeats as horizontal bars, the Pareto
@@ -21,6 +22,7 @@ the backend an interactive session uses; saving renders with Agg.
 
 from __future__ import annotations
 
+import math
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -108,6 +110,16 @@ def set_log_scales(axes: Axes, x: bool = True, y: bool = True) -> None:
                   color="grey")
 
 
+def number_text(value: float) -> str:
+    """A number for titles, legends and hover texts, with the 4 significant digits the tables print: whole
+    numbers in full (3600, not 3.6e+03), others as ``%.4g`` (0.2726, 1e-08); "–" when not finite."""
+    if not math.isfinite(value):
+        return "–"
+    if value == round(value) and abs(value) < 1e15:
+        return str(int(round(value)))
+    return f"{value:.4g}"
+
+
 def save(figure: Figure, stem: Path) -> Path:
     """Write ``stem``.png (120 dpi) and ``stem``.svg; return the stem."""
     stem.parent.mkdir(parents=True, exist_ok=True)
@@ -158,7 +170,7 @@ class Sweep:
         integrator, family: identity; ``adaptive`` is true for a tolerance sweep.
         points: ok runs with a finite, positive x and y, ordered along the sweep (coarse to fine).
         no_value: ok runs without a plottable x or y (drawn on the bottom edge).
-        diverged, failed: runs with that status (drawn on the top edge at their x).
+        diverged: runs that diverged; failed: runs that failed or timed out (drawn on the top edge at their x).
     """
 
     integrator: str
@@ -172,8 +184,8 @@ class Sweep:
     @property
     def label(self) -> str:
         """The integrator with its counts of diverged and failed runs."""
-        counts = [f"{len(rows)} {status}" for status, rows in
-                  ((STATUS_DIVERGED, self.diverged), (STATUS_FAILED, self.failed)) if len(rows)]
+        statuses = pd.concat([self.diverged["status"], self.failed["status"]]).value_counts(sort=False)
+        counts = [f"{count} {status}" for status, count in statuses.items()]
         return self.integrator + (f" ({', '.join(counts)})" if counts else "")
 
 
@@ -191,7 +203,8 @@ def sweeps(frame: pd.DataFrame, x_column: str, y_column: str) -> list[Sweep]:
         points = ok[plottable].assign(**{y_column: y[plottable]})
         points = points.assign(_along=-points["kh"].fillna(points["tol"])).sort_values("_along", kind="stable")
         found.append(Sweep(integrator, family, adaptive, points.drop(columns="_along"), ok[~plottable],
-                           rows[rows["status"] == STATUS_DIVERGED], rows[rows["status"] == STATUS_FAILED]))
+                           rows[rows["status"] == STATUS_DIVERGED],
+                           rows[~rows["status"].isin((STATUS_OK, STATUS_DIVERGED))]))
     return found
 
 
@@ -272,6 +285,11 @@ def cost_axes(frame: pd.DataFrame) -> tuple[str, str]:
 
 
 def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame, stem: Path) -> Path:
+    """``work_precision_figure`` saved under ``stem``."""
+    return save(work_precision_figure(scene_frame, verdict, front), stem)
+
+
+def work_precision_figure(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame) -> Figure:
     """Verdict against time and against accepted steps for one scene, one line per integrator,
     fixed-step and tolerance sweeps on the same axes, the time's spread as bars, the Pareto envelope
     (``front``: ``bench.verdicts.pareto.pareto_front`` rows of this scene and verdict, may be empty) on the
@@ -282,7 +300,7 @@ def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame,
     axes_pair = figure.subplots(1, 2, sharey=True)
     handles = []
     time_cost = cost_axes(scene_frame)[0]
-    for axes, cost in zip(axes_pair, cost_axes(scene_frame)):
+    for axes, cost in zip(axes_pair, cost_axes(scene_frame), strict=True):
         handles = plot_sweeps(axes, scene_frame, cost, verdict, x_spread=COST_SPREADS.get(cost),
                               labels=cost == time_cost)
         set_log_scales(axes)
@@ -293,7 +311,7 @@ def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame,
     figure.suptitle(f"{scene}: {title} against cost (lower left is better)", fontsize=12)
     extra = [envelope] if envelope is not None else []
     figure.legend(handles=handles + extra + outcome_legend_handles(), loc="outside right upper", fontsize=9)
-    return save(figure, stem)
+    return figure
 
 
 def reference_slopes(fixed: pd.DataFrame, points: dict[str, pd.DataFrame]) -> list[tuple[int, np.ndarray, np.ndarray]]:
@@ -315,6 +333,11 @@ def reference_slopes(fixed: pd.DataFrame, points: dict[str, pd.DataFrame]) -> li
 
 
 def convergence(scene_frame: pd.DataFrame, orders: dict[str, float], stem: Path) -> Path:
+    """``convergence_figure`` saved under ``stem``."""
+    return save(convergence_figure(scene_frame, orders), stem)
+
+
+def convergence_figure(scene_frame: pd.DataFrame, orders: dict[str, float]) -> Figure:
     """Reference error against k·h for the fixed-step integrators of one scene, with a reference slope for each
     declared order; ``orders`` maps an integrator to its fitted order (shown in the legend)."""
     scene = scene_frame["scene"].iloc[0]
@@ -322,7 +345,7 @@ def convergence(scene_frame: pd.DataFrame, orders: dict[str, float], stem: Path)
     figure = Figure(figsize=(9.5, 5.2), layout="constrained")
     axes = figure.subplots()
     handles = plot_sweeps(axes, fixed, "kh", "reference_error")
-    for handle, sweep in zip(handles, sweeps(fixed, "kh", "reference_error")):
+    for handle, sweep in zip(handles, sweeps(fixed, "kh", "reference_error"), strict=True):
         order = orders.get(sweep.integrator)
         fitted = "no fit" if order is None or not np.isfinite(order) else f"fitted order {order:.2f}"
         handle.set_label(f"{handle.get_label()}, {fitted}")
@@ -336,10 +359,15 @@ def convergence(scene_frame: pd.DataFrame, orders: dict[str, float], stem: Path)
     axes.grid(True, which="major", alpha=0.3)
     axes.set_title(f"{scene}: convergence of the fixed-step integrators", pad=14)
     figure.legend(handles=handles + outcome_legend_handles()[:2], loc="outside right upper", fontsize=9)
-    return save(figure, stem)
+    return figure
 
 
 def tolerance(scene_frame: pd.DataFrame, stem: Path) -> Path:
+    """``tolerance_figure`` saved under ``stem``."""
+    return save(tolerance_figure(scene_frame), stem)
+
+
+def tolerance_figure(scene_frame: pd.DataFrame) -> Figure:
     """Achieved reference error against the requested tolerance for the adaptive integrators of one scene,
     with the line error = tolerance."""
     scene = scene_frame["scene"].iloc[0]
@@ -359,7 +387,7 @@ def tolerance(scene_frame: pd.DataFrame, stem: Path) -> Path:
     axes.grid(True, which="major", alpha=0.3)
     axes.set_title(f"{scene}: achieved error against requested tolerance", pad=14)
     figure.legend(handles=handles + outcome_legend_handles()[:2], loc="outside right upper", fontsize=9)
-    return save(figure, stem)
+    return figure
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -412,7 +440,7 @@ def stability(table: pd.DataFrame) -> Figure:
     figure = Figure(figsize=(12, 3.6 * rows_of_panels + 0.8), layout="constrained")
     # y not shared: a panel whose runs all diverge (explicit Euler) would impose its placeholder limits on all
     panels = np.atleast_1d(figure.subplots(rows_of_panels, columns, sharex=True, squeeze=False)).ravel()
-    for axes, (integrator, family) in zip(panels, integrators):
+    for axes, (integrator, family) in zip(panels, integrators, strict=False):  # spare panels: hidden below
         style = integrator_style(integrator, family)
         for rotation, linestyle in ((False, "-"), (True, "--")):
             rows = table[(table["integrator"] == integrator) & (table["rotation"] == rotation)].sort_values("kh")
@@ -476,7 +504,7 @@ def rotation_growth(table: pd.DataFrame) -> Figure:
     axes.set_xlabel("k·h")
     axes.set_ylabel("amplitude growth per step")
     if not rotating.empty:
-        axes.set_title(f"Growth with Earth's rotation (a/k = {rotating['rate_ratio'].iloc[0]:.3g})", pad=10)
+        axes.set_title(f"Growth with Earth's rotation (a/k = {number_text(rotating['rate_ratio'].iloc[0])})", pad=10)
         axes.legend(fontsize=9)
     axes.grid(True, which="major", alpha=0.3)
     return figure
@@ -521,7 +549,7 @@ def release_azimuth(table: pd.DataFrame) -> Figure:
     figure = Figure(figsize=(12, 4.6), layout="constrained")
     panels = np.atleast_1d(figure.subplots(1, len(latitudes), sharey=True, squeeze=False)).ravel()
     handles = {}
-    for axes, latitude in zip(panels, latitudes):
+    for axes, latitude in zip(panels, latitudes, strict=True):
         rows = table[table["latitude_deg"] == latitude]
         for (integrator, family), sweep in rows.groupby(["integrator", "family"], sort=True):
             sweep = sweep.sort_values("release_azimuth_deg")
@@ -541,7 +569,8 @@ def release_azimuth(table: pd.DataFrame) -> Figure:
     first = table.iloc[0]
     figure.suptitle(f"Precession error against release direction (0° = North-South swing, 90° = East-West): "
                     f"{first['config_model']} model, L = {first['config_length_m']:g} m, "
-                    f"A = {first['config_amplitude_m']:g} m, kh = {first['kh']:g}, {first['config_duration_s']:g} s")
+                    f"A = {first['config_amplitude_m']:g} m, kh = {number_text(first['kh'])}, "
+                    f"{number_text(first['config_duration_s'])} s")
     return figure
 
 
@@ -559,7 +588,7 @@ def adequacy(table: pd.DataFrame) -> Figure:
          "Precession rate missed"),
         ("trajectory_gap", "expected_trajectory_gap", "max |r(simpler) − r(richer)| / A", "Path missed"),
     )
-    for axes, (measured_column, expected_column, label, title) in zip(panels, panel_columns):
+    for axes, (measured_column, expected_column, label, title) in zip(panels, panel_columns, strict=True):
         axes.set_title(title, fontsize=10)
         measured = np.abs(rows[measured_column].to_numpy(dtype=float))
         shown = np.isfinite(measured) & (measured > 0)
@@ -569,7 +598,7 @@ def adequacy(table: pd.DataFrame) -> Figure:
             expected = np.abs(rows[expected_column].to_numpy(dtype=float))
             known = np.isfinite(expected) & (expected > 0)
             axes.plot(expected[known], positions[known], "o", markerfacecolor="none", markeredgecolor="black",
-                      markersize=10, label="leading-order expectation")
+                      markersize=10, label="leading-order expectation", zorder=1.5)  # beneath the measured dots
             values.append(expected[known])
         for position in positions[~shown]:
             axes.text(0.01, position, "no finite value", transform=axes.get_yaxis_transform(), va="center",

@@ -1,16 +1,24 @@
 """The interactive report in a real headless browser: index.html is opened from disk with no network, and every
 plotly chart must have drawn its points (each chart's div says how many markers its data has,
 ``reports.interactive.drawn_points``; the browser's DOM must hold exactly that many marker paths) and its
-lines and legend. Needs Debian's ``chromium`` (installed by .ci/run); skipped when it is absent outside CI."""
+lines and legend. On the report of the fixture database (``report_fixture``) the numbers the browser holds
+after decoding each chart's data, read back from the page by a probe script, must equal that scene's rows in
+the database (the oracles of ``test_report_oracle_charts``), and each trace must draw one marker per finite
+point. Needs Debian's ``chromium`` (installed by .ci/run); skipped when it is absent outside CI."""
 
 from __future__ import annotations
 
+import json
 import os
+import re
 import shutil
+import sqlite3
 import subprocess
 from html.parser import HTMLParser
 from pathlib import Path
 
+import numpy as np
+import pandas as pd
 import pytest
 
 from foucault_bench.reports.build import ReportInputs, build_report
@@ -22,6 +30,7 @@ from foucault_bench.reports.studies import (
     precession_vs_latitude,
     stability_sweep,
 )
+import test_report_oracle_charts as oracle
 from test_reports import adequacy_fixture, results_fixture
 
 BROWSER = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -78,11 +87,15 @@ def report_dom(tmp_path_factory) -> tuple[Path, str]:
     runs = results_fixture()  # one scene: every kind of chart, half the figures
     build_report(ReportInputs(runs=runs[runs["scene"] == "lab"], studies=studies, adequacy=adequacy_fixture(),
                               include_seed=True), folder)
-    profile = tmp_path_factory.mktemp("browser-profile")
-    done = subprocess.run([BROWSER, *BROWSER_FLAGS, f"--user-data-dir={profile}", (folder / "index.html").as_uri()],
-                          capture_output=True, text=True, timeout=50, stdin=subprocess.DEVNULL)
+    return folder, _dom(folder / "index.html", tmp_path_factory.mktemp("browser-profile"))
+
+
+def _dom(page: Path, profile: Path) -> str:
+    """The DOM of ``page`` once its scripts have run, from headless chromium."""
+    done = subprocess.run([BROWSER, *BROWSER_FLAGS, f"--user-data-dir={profile}", page.as_uri()],
+                          capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
     assert done.returncode == 0 and done.stdout, done.stderr[-2000:]
-    return folder, done.stdout
+    return done.stdout
 
 
 def test_every_chart_draws_its_points_lines_and_legend(report_dom: tuple[Path, str]) -> None:
@@ -95,8 +108,9 @@ def test_every_chart_draws_its_points_lines_and_legend(report_dom: tuple[Path, s
         assert chart["points"] == chart["expected"], chart
         assert chart["points"] + chart["lines"] > 0, chart
         assert chart["legend"] > 0, chart
-    # curves without markers: the long-time energy chart and the seed section's four figures
-    assert sum(chart["expected"] == 0 for chart in counter.charts) == 5
+    # curves without markers: the seed section's four figures (the long-time energy chart marks explicit
+    # Euler's divergence with ▲, as its static version does)
+    assert sum(chart["expected"] == 0 for chart in counter.charts) == 4
 
 
 def test_points_carry_their_run_for_the_hover(report_dom: tuple[Path, str]) -> None:
@@ -105,3 +119,90 @@ def test_points_carry_their_run_for_the_hover(report_dom: tuple[Path, str]) -> N
     html = (folder / "index.html").read_text(encoding="utf-8")
     for field in ("CPU time", "wall time", "nfev", "steps", "status", "all runge-kutta"):
         assert field in html
+
+
+PROBE = """<script>
+window.addEventListener('load', function () { setTimeout(function () {
+  function plain(key, value) { return ArrayBuffer.isView(value) ? Array.from(value) : value; }
+  function picked(trace) {
+    var error = trace.error_x && trace.error_x.visible
+      ? {array: trace.error_x.array, arrayminus: trace.error_x.arrayminus} : null;
+    return {name: trace.name, mode: trace.mode, meta: trace.meta, xaxis: trace.xaxis, yaxis: trace.yaxis, x: trace.x,
+            y: trace.y, marker: {symbol: trace.marker ? trace.marker.symbol : null}, error_x: error,
+            customdata: trace.customdata};
+  }
+  var charts = [];
+  document.querySelectorAll('div.chart').forEach(function (chart) {
+    var full = chart._fullData || [];
+    charts.push({id: chart.id, layout: JSON.parse(JSON.stringify(chart.layout, plain)),
+                 data: JSON.parse(JSON.stringify(full.map(picked), plain)),
+                 drawn: full.map(function (trace) {
+                   return chart.querySelectorAll('g.trace' + trace.uid + ' path.point').length; })});
+  });
+  var probe = document.createElement('pre');
+  probe.id = 'probe';
+  probe.textContent = JSON.stringify(charts);
+  document.body.appendChild(probe);
+}, 0); });
+</script>"""
+"""Appended to a copy of index.html: once every chart is drawn, writes into the page each chart's traces as
+plotly.js holds them after reading the page's JSON (``_fullData``: binary arrays decoded), its layout and the
+marker paths drawn per trace."""
+
+
+@pytest.fixture(scope="module")
+def browser_charts(fixture_report: Path, tmp_path_factory) -> tuple[dict[str, oracle.Chart], list[dict]]:
+    """The fixture report's charts as the browser holds them (by static file stem, as ``oracle.page_charts``),
+    and the probe's raw entries."""
+    page = fixture_report / "index_probe.html"
+    page.write_text((fixture_report / "index.html").read_text(encoding="utf-8").replace("</body>", PROBE + "</body>"),
+                    encoding="utf-8")
+    dom = _dom(page, tmp_path_factory.mktemp("probe-profile"))
+    probe = re.search(r"<pre id=\"probe\">(.*?)</pre>", dom, re.S)
+    assert probe is not None, dom[-2000:]
+    entries = json.loads(probe.group(1).replace("&lt;", "<").replace("&gt;", ">").replace("&amp;", "&"))
+    by_id = {entry["id"]: entry for entry in entries}
+    page_charts = oracle.page_charts(fixture_report)
+    return ({stem: oracle.Chart(stem, chart.caption, {"data": by_id[chart.chart_id]["data"],
+                                                       "layout": by_id[chart.chart_id]["layout"]}, chart.chart_id)
+             for stem, chart in page_charts.items()}, entries)
+
+
+@pytest.fixture(scope="module")
+def database_rows(fixture_database: Path) -> pd.DataFrame:
+    with sqlite3.connect(fixture_database) as connection:
+        return pd.read_sql_query("SELECT * FROM runs", connection)
+
+
+def test_the_browser_holds_each_scenes_runs(browser_charts, database_rows: pd.DataFrame) -> None:
+    """The oracles of the page's JSON, on the numbers the browser decoded from it."""
+    charts, _ = browser_charts
+    assert set(charts) == oracle.expected_stems(database_rows)
+    oracle.test_work_precision_charts_show_their_scene_and_verdict(charts, database_rows)
+    oracle.test_the_pareto_trace_is_the_non_dominated_set(charts, database_rows)
+    oracle.test_diverged_and_failed_runs_are_drawn_above_the_data(charts, database_rows)
+    oracle.test_convergence_charts_show_each_scenes_fixed_step_runs(charts, database_rows)
+    oracle.test_tolerance_charts_show_each_scenes_adaptive_runs(charts, database_rows)
+
+
+def _axis_type(layout: dict, name: str, reference: str) -> str | None:
+    """The type of axis ``reference`` ("x2" → layout["xaxis2"]) of a probed layout."""
+    return layout.get(name + reference[1:], {}).get("type")
+
+
+def test_each_trace_draws_one_marker_per_finite_point(browser_charts) -> None:
+    _, entries = browser_charts
+    checked = 0
+    for entry in entries:
+        for trace, drawn in zip(entry["data"], entry["drawn"], strict=True):
+            if "markers" not in (trace.get("mode") or "") or trace.get("meta") == "family-toggle":
+                continue
+            x, y = oracle.decode(trace.get("x")), oracle.decode(trace.get("y"))
+            keep = np.isfinite(x) & np.isfinite(y)
+            if _axis_type(entry["layout"], "xaxis", trace.get("xaxis", "x")) == "log":
+                keep &= x > 0
+            if _axis_type(entry["layout"], "yaxis", trace.get("yaxis", "y")) == "log":
+                keep &= y > 0
+            assert drawn == int(keep.sum()), (entry["id"], trace.get("name"), drawn, int(keep.sum()))
+            checked += drawn
+    assert checked > 0
