@@ -158,7 +158,7 @@ def stored_runs(store: ResultsStore, scene: Scene) -> pd.DataFrame:
                 & (rows["n_out"] == scene.n_intervals + 1)]
     versions = store.matrix_runs().set_index("matrix_id")["code_version"]
     rows = rows.assign(code_version=rows["matrix_id"].map(versions))
-    setting = [setting_label(kh, tol) for kh, tol in zip(rows["kh"], rows["tol"])]
+    setting = [setting_label(kh, tol) for kh, tol in zip(rows["kh"], rows["tol"], strict=True)]
     return rows.assign(_setting=setting).drop_duplicates(["integrator", "_setting"], keep="last") \
                .drop(columns="_setting").reset_index(drop=True)
 

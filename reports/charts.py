@@ -282,7 +282,7 @@ def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame,
     axes_pair = figure.subplots(1, 2, sharey=True)
     handles = []
     time_cost = cost_axes(scene_frame)[0]
-    for axes, cost in zip(axes_pair, cost_axes(scene_frame)):
+    for axes, cost in zip(axes_pair, cost_axes(scene_frame), strict=True):
         handles = plot_sweeps(axes, scene_frame, cost, verdict, x_spread=COST_SPREADS.get(cost),
                               labels=cost == time_cost)
         set_log_scales(axes)
@@ -322,7 +322,7 @@ def convergence(scene_frame: pd.DataFrame, orders: dict[str, float], stem: Path)
     figure = Figure(figsize=(9.5, 5.2), layout="constrained")
     axes = figure.subplots()
     handles = plot_sweeps(axes, fixed, "kh", "reference_error")
-    for handle, sweep in zip(handles, sweeps(fixed, "kh", "reference_error")):
+    for handle, sweep in zip(handles, sweeps(fixed, "kh", "reference_error"), strict=True):
         order = orders.get(sweep.integrator)
         fitted = "no fit" if order is None or not np.isfinite(order) else f"fitted order {order:.2f}"
         handle.set_label(f"{handle.get_label()}, {fitted}")
@@ -412,7 +412,7 @@ def stability(table: pd.DataFrame) -> Figure:
     figure = Figure(figsize=(12, 3.6 * rows_of_panels + 0.8), layout="constrained")
     # y not shared: a panel whose runs all diverge (explicit Euler) would impose its placeholder limits on all
     panels = np.atleast_1d(figure.subplots(rows_of_panels, columns, sharex=True, squeeze=False)).ravel()
-    for axes, (integrator, family) in zip(panels, integrators):
+    for axes, (integrator, family) in zip(panels, integrators, strict=False):  # spare panels: hidden below
         style = integrator_style(integrator, family)
         for rotation, linestyle in ((False, "-"), (True, "--")):
             rows = table[(table["integrator"] == integrator) & (table["rotation"] == rotation)].sort_values("kh")
@@ -521,7 +521,7 @@ def release_azimuth(table: pd.DataFrame) -> Figure:
     figure = Figure(figsize=(12, 4.6), layout="constrained")
     panels = np.atleast_1d(figure.subplots(1, len(latitudes), sharey=True, squeeze=False)).ravel()
     handles = {}
-    for axes, latitude in zip(panels, latitudes):
+    for axes, latitude in zip(panels, latitudes, strict=True):
         rows = table[table["latitude_deg"] == latitude]
         for (integrator, family), sweep in rows.groupby(["integrator", "family"], sort=True):
             sweep = sweep.sort_values("release_azimuth_deg")
@@ -559,7 +559,7 @@ def adequacy(table: pd.DataFrame) -> Figure:
          "Precession rate missed"),
         ("trajectory_gap", "expected_trajectory_gap", "max |r(simpler) − r(richer)| / A", "Path missed"),
     )
-    for axes, (measured_column, expected_column, label, title) in zip(panels, panel_columns):
+    for axes, (measured_column, expected_column, label, title) in zip(panels, panel_columns, strict=True):
         axes.set_title(title, fontsize=10)
         measured = np.abs(rows[measured_column].to_numpy(dtype=float))
         shown = np.isfinite(measured) & (measured > 0)

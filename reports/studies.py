@@ -268,7 +268,7 @@ def precession_vs_latitude(config: PrecessionLatitudeConfig = PrecessionLatitude
     for t_chunk in _progress(list(chunks), "precession vs latitude", progress):
         batch.propagate_until(float(t_chunk))
     rows = []
-    for lat, p, points in zip(latitudes, params, turning):
+    for lat, p, points in zip(latitudes, params, turning, strict=True):
         rate, stderr = precession_rate(np.array(points, dtype=np.float64).reshape(-1, 3))
         rows.append({
             "latitude_deg": float(lat),

@@ -182,7 +182,7 @@ def parse_thresholds(document: dict[str, Any], *, source: str = "thresholds",
     for number, table in enumerate(tables, start=1):
         where = f"{source}: bound #{number}"
         own: list[str] = []
-        bound = _parse_bound(number, table, lambda message, where=where: own.append(f"{where}: {message}"))
+        bound = _parse_bound(number, table, lambda message, where=where, own=own: own.append(f"{where}: {message}"))
         problems += own
         if not own:
             bounds.append(bound)

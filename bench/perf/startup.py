@@ -87,7 +87,7 @@ def probe(matrix_path: str) -> dict[str, float]:
             marks.append(time.perf_counter())
             summary_text(store.records(matrix_id))
             marks.append(time.perf_counter())
-    return {piece: end - start for piece, start, end in zip(PIECES, marks, marks[1:])}
+    return {piece: end - start for piece, start, end in zip(PIECES, marks[:-1], marks[1:], strict=True)}
 
 
 def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:

@@ -355,7 +355,7 @@ class ResultsStore:
         cursor = self.connection.execute(f"SELECT * FROM {RUNS_TABLE} WHERE matrix_id = ? ORDER BY rowid",
                                          (self.resolve_matrix_id(matrix_id),))
         names = [description[0] for description in cursor.description]
-        return [dict(zip(names, values)) for values in cursor]
+        return [dict(zip(names, values, strict=True)) for values in cursor]
 
     # --- adequacy and study tables --------------------------------------------------------------------------
 
@@ -494,7 +494,8 @@ def run_identity(frame: pd.DataFrame) -> pd.Series:
     the code version that produced it (run keys include the code version, so they differ across versions)."""
     import pandas as pd
 
-    settings = [f"tol={float(tol)!r}" if pd.notna(tol) else f"kh={float(kh)!r}" for kh, tol in zip(frame["kh"], frame["tol"])]
+    settings = [f"tol={float(tol)!r}" if pd.notna(tol) else f"kh={float(kh)!r}"
+                for kh, tol in zip(frame["kh"], frame["tol"], strict=True)]
     return frame["scene"] + " " + frame["integrator"] + " " + pd.Series(settings, index=frame.index)
 
 
@@ -520,7 +521,7 @@ def compare_runs(frame_a: pd.DataFrame, frame_b: pd.DataFrame) -> tuple[pd.DataF
         equal = _bits_equal(merged[f"{column}_a"], merged[f"{column}_b"])
         mismatches += [{"run": run, "column": column, "a": a, "b": b}
                        for run, a, b in zip(merged["run"][~equal], merged[f"{column}_a"][~equal],
-                                            merged[f"{column}_b"][~equal])]
+                                            merged[f"{column}_b"][~equal], strict=True)]
     costs = merged[["run", "scene", "integrator"]].copy()
     for column in COST_COLUMNS:
         cost_a, cost_b = merged[f"{column}_a"].astype(float), merged[f"{column}_b"].astype(float)
