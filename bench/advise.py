@@ -26,7 +26,7 @@ import time
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
@@ -377,7 +377,7 @@ def search(store: ResultsStore, scene: Scene, target: Target, runs: pd.DataFrame
         for spec, probe in ((spec, next(p for p in probes if p.integrator == spec.integrator)) for spec in specs):
             row = rows[(rows["integrator"] == spec.integrator)].iloc[-1]
             value = abs(float(row[target.metric])) if pd.notna(row[target.metric]) else math.inf
-            setting = spec.tol if probe.adaptive else spec.kh
+            setting = cast(float, spec.tol if probe.adaptive else spec.kh)
             probe.tried[setting] = value if row["status"] == "ok" else math.inf
     return matrix_ids, planned
 

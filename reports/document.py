@@ -18,6 +18,7 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import pandas as pd
@@ -233,7 +234,7 @@ def _anchors(blocks: list[Block]) -> dict[int, str]:
 def _interactive_html(block: Figure, number: int) -> str:
     """A plotly chart: its div (``data-points``: the markers it should draw) and the script drawing it."""
     chart_id = f"chart-{number}"
-    figure_json = block.interactive.replace("</", "<\\/")
+    figure_json = cast(str, block.interactive).replace("</", "<\\/")  # called for interactive figures only
     return (f"<figure><div class='chart' id='{chart_id}' data-points='{block.points}'></div><script>"
             f"(function () {{ var figure = {figure_json}; "
             f"Plotly.newPlot('{chart_id}', figure.data, figure.layout, {{responsive: true, displaylogo: false}})"

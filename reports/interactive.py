@@ -13,13 +13,14 @@ dashed = tolerance sweep). Diverged and failed runs are drawn above the data (â–
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
 import plotly.graph_objects as go
 from matplotlib.colors import to_hex
 from matplotlib.figure import Figure as MplFigure
+from matplotlib.gridspec import SubplotSpec
 from matplotlib.ticker import FixedFormatter
 from plotly.subplots import make_subplots
 
@@ -203,12 +204,13 @@ def from_matplotlib(figure: MplFigure) -> go.Figure:
     without a label is named after its panel and left out of the legend when a labelled line of the same colour
     in the panel stands for it; lines drawn in axes coordinates (edge markers, reference lines) are left out."""
     panels = [axes for axes in figure.axes if axes.get_subplotspec() is not None and axes.get_visible()]
-    geometry = panels[0].get_subplotspec().get_geometry()[:2] if panels else (1, 1)
+    specs = {axes: cast(SubplotSpec, axes.get_subplotspec()) for axes in panels}  # not None: filtered above
+    geometry = specs[panels[0]].get_geometry()[:2] if panels else (1, 1)
     plot = make_subplots(rows=geometry[0], cols=geometry[1], horizontal_spacing=0.08,
                          subplot_titles=[axes.get_title() for axes in panels])
     legend_names: set[str] = set()
     for axes in panels:
-        spec = axes.get_subplotspec()
+        spec = specs[axes]
         row, col = spec.rowspan.start + 1, spec.colspan.start + 1
         lines = [line for line in axes.get_lines() if line.get_transform() == axes.transData]
         labelled_colours = {to_hex(line.get_color()) for line in lines if not str(line.get_label()).startswith("_")}
@@ -216,7 +218,7 @@ def from_matplotlib(figure: MplFigure) -> go.Figure:
             colour = to_hex(line.get_color())
             label = str(line.get_label())
             labelled = not label.startswith("_")
-            linestyle = line.get_linestyle()
+            linestyle = str(line.get_linestyle())
             name = label if labelled else axes.get_title() + (" (dashed)" if linestyle == "--" else "")
             shown = (labelled or colour not in labelled_colours) and name not in legend_names
             legend_names.add(name)
@@ -226,7 +228,7 @@ def from_matplotlib(figure: MplFigure) -> go.Figure:
                 x=np.asarray(line.get_xdata(), dtype=float), y=np.asarray(line.get_ydata(), dtype=float), mode=mode,
                 name=name, legendgroup=name, showlegend=shown,
                 line={"color": colour, "dash": DASHES.get(linestyle, "solid"), "width": float(line.get_linewidth())},
-                marker={"color": colour, "symbol": SYMBOLS.get(line.get_marker(), "circle"),
+                marker={"color": colour, "symbol": SYMBOLS.get(str(line.get_marker()), "circle"),
                         "size": max(4.0, float(line.get_markersize()))},
                 hovertemplate=f"{name}<br>x %{{x:.4g}}<br>y %{{y:.4g}}<extra></extra>"), row=row, col=col)
         plot.update_xaxes(title_text=axes.get_xlabel(), type="log" if axes.get_xscale() == "log" else "linear",

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
-from typing import Callable
+from typing import Any, Callable, cast
 
 import numpy as np
 import pandas as pd
@@ -37,7 +37,7 @@ from foucault_bench.bench.schema import setting_label
 from foucault_bench.bench.verdicts.columns import energy_scale, energy_verdicts, released_from_rest
 from foucault_bench.bench.verdicts.stability import measured_stability_limit, spectral_growth, step_matrix
 from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
-from foucault_bench.integrators import STATUS_OK, Problem, Solution, get_integrator
+from foucault_bench.integrators import STATUS_OK, FixedStepIntegrator, Problem, Solution, get_integrator
 from foucault_bench.integrators.registry import REGISTRY
 from foucault_bench.models import Model, PendulumParameters, get_model
 from foucault_bench.models.analytic import linear_exact, seed_approximate, seed_gap_bound
@@ -181,7 +181,7 @@ def stability_sweep(config: StabilitySweepConfig = StabilitySweepConfig(), progr
     cases = [(name, rotation) for name in fixed_step for rotation in (False, True)]
     rows = []
     for name, rotation in _progress(cases, "stability sweep", progress):
-        integrator = REGISTRY[name]
+        integrator = cast(FixedStepIntegrator, REGISTRY[name])
         params = PendulumParameters(length_m=config.length_m, latitude_deg=config.latitude_deg,
                                     amplitude_m=config.amplitude_m,
                                     earth_rate_rad_s=SIDEREAL_EARTH_RATE_RAD_S if rotation else 0.0)
@@ -559,7 +559,7 @@ def ensure_studies(store: ResultsStore | None, recompute: bool = False, configs:
 def _with_config_columns(frame: pd.DataFrame, config: object, exclude: tuple[str, ...]) -> pd.DataFrame:
     """Add the config's scalar fields as constant columns (``config_<field>``) so a stored table says how it
     was made."""
-    for name, value in asdict(config).items():
+    for name, value in asdict(cast(Any, config)).items():  # config: one of this module's dataclasses
         if name not in exclude:
             frame[f"config_{name}"] = value
     return frame

@@ -28,7 +28,7 @@ import sqlite3
 import uuid
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterable, Mapping
+from typing import TYPE_CHECKING, Any, Iterable, Mapping, Sequence
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.run.lock import MatrixRunLock, MatrixRunLocked
@@ -415,7 +415,7 @@ class ResultsStore:
             self._writer = sqlite3.connect(self.path, timeout=30.0)
         return self._writer
 
-    def _append(self, name: str, columns: list[str], records: list[Mapping[str, Any]],
+    def _append(self, name: str, columns: list[str], records: Sequence[Mapping[str, Any]],
                 connection: sqlite3.Connection | None = None) -> None:
         """Append ``records`` (mappings; a missing key is NULL) to table ``name``, creating the table with
         ``columns`` or adding the columns it lacks. Plain ``sqlite3``: the runner stores adequacy rows without

@@ -116,6 +116,7 @@ class WorkerProcess:
 
     def fileno(self) -> int:
         """The outcome channel, for ``multiprocessing.connection.wait`` or ``select``."""
+        assert self.process.stdout is not None  # a pipe (__init__)
         return self.process.stdout.fileno()
 
     def alive(self) -> bool:
@@ -129,6 +130,7 @@ class WorkerProcess:
         return True
 
     def _send(self, value: Any) -> bool:
+        assert self.process.stdin is not None  # a pipe (__init__)
         try:
             write_message(self.process.stdin.fileno(), value)
         except (OSError, ValueError):  # a closed pipe: the worker is gone
@@ -154,7 +156,7 @@ class WorkerProcess:
         deadline = None if timeout_s is None else time.monotonic() + timeout_s
         while True:
             wait_s = 1.0 if deadline is None else min(1.0, max(0.0, deadline - time.monotonic()))
-            ready, _, _ = select.select([self.process.stdout], [], [], wait_s)
+            ready, _, _ = select.select([self], [], [], wait_s)
             if ready:
                 return self.receive() or ("died", None)
             if deadline is not None and time.monotonic() >= deadline:
@@ -173,6 +175,7 @@ class WorkerProcess:
 
     def close(self) -> None:
         """Let an idle worker exit (end-of-file on its stdin), killing it if it has not within a few seconds."""
+        assert self.process.stdin is not None  # a pipe (__init__)
         try:
             self.process.stdin.close()
         except OSError:
@@ -184,7 +187,7 @@ class WorkerProcess:
         self._close_pipes()
 
     def _close_pipes(self) -> None:
-        for pipe in (self.process.stdin, self.process.stdout):
+        for pipe in filter(None, (self.process.stdin, self.process.stdout)):
             try:
                 pipe.close()
             except OSError:
