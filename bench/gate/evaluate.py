@@ -87,7 +87,7 @@ def evaluate(thresholds: Thresholds, frame: pd.DataFrame) -> list[Outcome]:
             elif bound.kind == "max_ratio":
                 assert bound.relative_to is not None  # a max_ratio bound has one (thresholds._parse_bound)
                 other = counterpart_row(frame, row, bound.relative_to)
-                assert other is not None  # refused before evaluating (select.selection_problems)
+                assert other is not None  # refused before evaluating (select.validate_against)
                 other_value = as_float(other[bound.column])
                 detail = (f"{bound.relative_to.integrator} {setting_label(other['kh'], other['tol'])}: "
                           f"{other_value:.3g}")
