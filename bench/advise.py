@@ -29,7 +29,7 @@ import time
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
@@ -162,7 +162,7 @@ def stored_runs(store: ResultsStore, scene: Scene) -> pd.DataFrame:
     rows = rows[rows["scene_key"] == scene_key(scene)]
     versions = store.matrix_runs().set_index("matrix_id")["code_version"]
     rows = rows.assign(code_version=rows["matrix_id"].map(versions))
-    setting = [setting_label(kh, tol) for kh, tol in zip(rows["kh"], rows["tol"])]
+    setting = [setting_label(kh, tol) for kh, tol in zip(rows["kh"], rows["tol"], strict=True)]
     return rows.assign(_setting=setting).drop_duplicates(["integrator", "_setting"], keep="last") \
                .drop(columns="_setting").reset_index(drop=True)
 
@@ -400,7 +400,7 @@ def search(store: ResultsStore, scene: Scene, target: Target, runs: pd.DataFrame
         for spec, probe in ((spec, next(p for p in probes if p.integrator == spec.integrator)) for spec in specs):
             row = rows[(rows["integrator"] == spec.integrator)].iloc[-1]
             value = abs(float(row[target.metric])) if pd.notna(row[target.metric]) else math.inf
-            setting = spec.tol if probe.adaptive else spec.kh
+            setting = cast(float, spec.tol if probe.adaptive else spec.kh)
             probe.tried[setting] = value if row["status"] == "ok" else math.inf
     return matrix_ids, planned
 

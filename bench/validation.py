@@ -26,7 +26,7 @@ import math
 import numbers
 import tomllib
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, TypeGuard
 
 from foucault_bench.bench.errors import InputError
 
@@ -54,7 +54,7 @@ def suggestion(word: Any, choices: Iterable[Any]) -> str:
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
-def is_number(value: Any) -> bool:
+def is_number(value: Any) -> TypeGuard[float]:
     """A real number a float can hold (``numbers.Real``: int, float and numpy's scalars register there), but not
     a bool, nor an int too large for a float (10**400 would raise OverflowError in every later comparison)."""
     if not isinstance(value, numbers.Real) or isinstance(value, bool):

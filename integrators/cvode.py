@@ -113,6 +113,7 @@ class CvodeCompiled(CvodeIntegrator):
         self.library_dir = library_dir
 
     def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
+        assert tol is not None  # an adaptive integrator's setting (validate_setting)
         library = load_sundials(self.library_dir)
         settings = self.settings(problem, tol)
         run = run_cvode(library, problem.model, settings, problem.parameter_vector)

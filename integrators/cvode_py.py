@@ -38,6 +38,7 @@ class CvodePython(CvodeIntegrator):
     def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
         from sksundae.cvode import CVODE
 
+        assert tol is not None  # an adaptive integrator's setting (validate_setting)
         settings = self.settings(problem, tol)
         p = problem.parameter_vector
         rhs_into = problem.model.numba_rhs_into
@@ -90,7 +91,7 @@ PYTHON_DRIVEN = "\n\n    Driven by scikit-sundae with Python callbacks (what a P
 
 @register
 class CvodeAdamsPy(CvodePython):
-    __doc__ = CvodeAdams.__doc__.rstrip() + PYTHON_DRIVEN
+    __doc__ = (CvodeAdams.__doc__ or "").rstrip() + PYTHON_DRIVEN
     name: ClassVar[str] = "cvode_adams_py"
     method: ClassVar[str] = CvodeAdams.method
     reference: ClassVar[str] = f"{CvodeAdams.reference}; scikit-sundae"
@@ -98,7 +99,7 @@ class CvodeAdamsPy(CvodePython):
 
 @register
 class CvodeBdfPy(CvodePython):
-    __doc__ = CvodeBdf.__doc__.rstrip() + PYTHON_DRIVEN
+    __doc__ = (CvodeBdf.__doc__ or "").rstrip() + PYTHON_DRIVEN
     name: ClassVar[str] = "cvode_bdf_py"
     method: ClassVar[str] = CvodeBdf.method
     reference: ClassVar[str] = f"{CvodeBdf.reference}; scikit-sundae"

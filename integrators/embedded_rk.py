@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Callable, ClassVar
+from typing import Callable, ClassVar, cast
 
 import numpy as np
 from llvmlite import ir
@@ -452,8 +452,8 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
         events = np.empty((int(2.2 * periods) + 16 if monitor else 0, 3))
         k = np.empty((self.tableau.stages + 1 + self.tableau.extra_stages, STATE_SIZE))
         code, t_reached, nfev, steps, rejected, n_events = compiled_driver(problem.model, self.tableau)(
-            problem.initial_state, problem.parameter_vector, problem.t_out, float(tol),
-            absolute_tolerance(params, tol), limit, monitor, out, events, k,
+            problem.initial_state, problem.parameter_vector, problem.t_out, float(cast(float, tol)),
+            absolute_tolerance(params, cast(float, tol)), limit, monitor, out, events, k,
         )
         solution = Solution(t=problem.t_out, y=out, nfev=int(nfev), njev=0, steps=int(steps),
                             rejected_steps=int(rejected))

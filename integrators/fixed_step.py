@@ -18,7 +18,7 @@ from __future__ import annotations
 import functools
 import math
 from abc import abstractmethod
-from typing import Callable, ClassVar
+from typing import Callable, ClassVar, cast
 
 import numpy as np
 from numba.np.unsafe.ndarray import to_fixed_tuple
@@ -183,10 +183,10 @@ class FixedStepIntegrator(Integrator):
         self.kernel(model)(np.array([0.1, 0.0, 0.0, 0.0]), p, 0.1, 1, 1, out, True, np.empty((1, 3)), 1.0e3)
 
     def validate_problem(self, problem: Problem, *, step_s: float | None) -> None:
-        uniform_output_stride(problem.t_out, step_s)
+        uniform_output_stride(problem.t_out, cast(float, step_s))  # validate_setting checked it first
 
     def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
-        stride, h = uniform_output_stride(problem.t_out, step_s)
+        stride, h = uniform_output_stride(problem.t_out, cast(float, step_s))
         n_out = problem.t_out.size
         n_steps = stride * (n_out - 1)
         out = np.full((n_out, 4), np.nan)

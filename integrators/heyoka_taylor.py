@@ -54,7 +54,7 @@ import collections
 import copy
 import functools
 import threading
-from typing import ClassVar
+from typing import ClassVar, cast
 
 import numpy as np
 
@@ -162,7 +162,7 @@ class HeyokaTaylor(AdaptiveIntegrator):
 
         fp_type = _fp_type(self.precision)
         model = problem.model
-        heyoka_tol = heyoka_tolerance(problem.params, tol)
+        heyoka_tol = heyoka_tolerance(problem.params, cast(float, tol))  # validate_setting checked it
         integrator = working_integrator(model, self.precision, heyoka_tol, monitor)
         integrator.time = fp_type(0.0)
         integrator.state[:] = np.asarray(problem.initial_state, dtype=fp_type)

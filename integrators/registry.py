@@ -35,10 +35,10 @@ ENTRY_POINT_MODULES: list[str] = []
 ENTRY_POINT_ERRORS: dict[str, str] = {}
 """Entry point name → why it could not be loaded (a broken plug-in must not break the suite)."""
 
-IntegratorClass = TypeVar("IntegratorClass", bound=type)
+IntegratorClass = TypeVar("IntegratorClass", bound=type[Integrator])
 
 
-def declaration_problems(cls: type) -> list[str]:
+def declaration_problems(cls: type[Integrator]) -> list[str]:
     """What is missing or malformed in the facts ``cls`` declares (``Integrator``'s class attributes)."""
     problems = [f"missing class attribute {attribute!r}" for attribute in
                 ("name", "family", "order", "adaptive", "reference") if not hasattr(cls, attribute)]

@@ -29,7 +29,7 @@ facts. Configuration (SciPy reference guide, ``scipy.integrate.solve_ivp``):
 from __future__ import annotations
 
 import functools
-from typing import ClassVar
+from typing import ClassVar, cast
 
 import numpy as np
 from scipy.integrate import DOP853, LSODA, RK45, OdeSolver, solve_ivp
@@ -47,8 +47,8 @@ def radial_event(t: float, y: np.ndarray, p: np.ndarray) -> float:
     return y[0] * y[2] + y[1] * y[3]
 
 
-radial_event.terminal = False
-radial_event.direction = -1.0
+radial_event.terminal = False  # type: ignore[attr-defined]  # solve_ivp reads an event's options off the function
+radial_event.direction = -1.0  # type: ignore[attr-defined]
 
 
 class StepMonitor:
@@ -103,6 +103,7 @@ class ScipyIvpIntegrator(AdaptiveIntegrator):
 
     def validate_setting(self, *, step_s: float | None, tol: float | None) -> None:
         super().validate_setting(step_s=step_s, tol=tol)
+        assert tol is not None  # an adaptive integrator's setting (checked just above)
         if tol < SCIPY_MIN_RTOL:
             raise ValueError(
                 f"{self.name}: tolerance {tol!r} is below scipy's floor 100 × machine epsilon = {SCIPY_MIN_RTOL:.3g} "
@@ -117,12 +118,12 @@ class ScipyIvpIntegrator(AdaptiveIntegrator):
             model.numba_rhs,
             (0.0, problem.t_end_s),
             problem.initial_state,
-            method=guarded_solver(self.solver_class),
+            method=guarded_solver(self.solver_class),  # type: ignore[arg-type]  # type[OdeSolver] is hashable
             t_eval=problem.t_out,
             events=radial_event if monitor else None,
             args=(problem.parameter_vector,),
             rtol=tol,
-            atol=absolute_tolerance(problem.params, tol),
+            atol=absolute_tolerance(problem.params, cast(float, tol)),
             step_monitor=monitor_steps,
             **options,
         )

@@ -236,7 +236,7 @@ class ButcherTableau:
         if problems:
             return problems
         stages_a = full_a[: s + 1, : s + 1]
-        checks = [("b", np.concatenate([b, [0.0]]), self.order),
+        checks: list[tuple[str, np.ndarray, int | None]] = [("b", np.concatenate([b, [0.0]]), self.order),
                   ("b − error_weights", np.concatenate([b, [0.0]]) - np.asarray(self.error_weights), self.error_order)]
         if self.secondary_error_weights is not None:
             checks.append(("b − secondary_error_weights",

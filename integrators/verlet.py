@@ -79,7 +79,7 @@ def rotation_coefficients(weights: tuple[float, ...]) -> tuple[float, ...]:
     """c_0 … c_s of R(c_s h) ∘ V(γ_s h) ∘ … ∘ R(c_1 h) ∘ V(γ_1 h) ∘ R(c_0 h): the half rotations of two
     neighbouring sub-steps merged (rotations about one axis add), c_0 = γ_1/2, c_i = (γ_i + γ_(i+1))/2,
     c_s = γ_s/2."""
-    inner = [0.5 * (a + b) for a, b in zip(weights[:-1], weights[1:])]
+    inner = [0.5 * (a + b) for a, b in zip(weights[:-1], weights[1:], strict=True)]
     return (0.5 * weights[0], *inner, 0.5 * weights[-1])
 
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import hashlib
 import types
-from typing import Callable
+from typing import Callable, cast
 
 from numba import njit
 from numba.core.caching import FunctionCache, IndexDataCacheFile
@@ -116,7 +116,7 @@ def jit(fn: Callable | None = None, **options) -> Dispatcher | Callable[[Callabl
     compiled in different processes would otherwise load under one symbol name into a third process.
     """
     if fn is None:
-        return lambda function: jit(function, **options)
+        return lambda function: cast(Dispatcher, jit(function, **options))
     digest = hashlib.sha256(f"{_fingerprint(fn, set())}{sorted(options.items())}".encode()).hexdigest()[:16]
     unique = types.FunctionType(fn.__code__, fn.__globals__, fn.__name__, fn.__defaults__, fn.__closure__)
     unique.__qualname__ = f"{fn.__qualname__}_{digest}"

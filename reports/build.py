@@ -333,7 +333,7 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
         trends = energy_trends(energy)
         horizon = span(float(trends["early_horizon_s"].iloc[0]))
         end = span(float(first["config_duration_s"]))
-        shown = set(zip(trends["integrator"], trends["setting"]))
+        shown = set(zip(trends["integrator"], trends["setting"], strict=True))
         if {"config_kh", "config_tol"} <= set(energy.columns) and shown == {
                 (name, study_setting_label(name, first["config_tol"] if REGISTRY[name].adaptive else first["config_kh"]))
                 for name in family_representatives().values()}:

@@ -26,6 +26,7 @@ import math
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -141,7 +142,7 @@ def mark_on_edge(axes: Axes, x_values: np.ndarray, colour: str, marker: str, edg
         return 0
     y = 1.0 if edge == "top" else 0.0
     known = np.isfinite(x) & (x > 0)
-    style = {"marker": marker, "markersize": 9, "linestyle": "none", "markerfacecolor": colour,
+    style: dict[str, Any] = {"marker": marker, "markersize": 9, "linestyle": "none", "markerfacecolor": colour,
              "markeredgecolor": "black", "clip_on": False, "zorder": 5}
     if known.any():
         axes.plot(x[known], np.full(known.sum(), y), transform=axes.get_xaxis_transform(), **style)
@@ -154,7 +155,8 @@ def mark_on_edge(axes: Axes, x_values: np.ndarray, colour: str, marker: str, edg
 
 def outcome_legend_handles() -> list[Line2D]:
     """Legend entries explaining the edge markers."""
-    common = {"linestyle": "none", "markerfacecolor": "white", "markeredgecolor": "black", "markersize": 8}
+    common: dict[str, Any] = {"linestyle": "none", "markerfacecolor": "white", "markeredgecolor": "black",
+                              "markersize": 8}
     return [
         Line2D([], [], marker=DIVERGED_MARKER, label="diverged (drawn on the top edge)", **common),
         Line2D([], [], marker=FAILED_MARKER, label="failed (drawn on the top edge)", **common),
@@ -319,8 +321,8 @@ def reference_slopes(fixed: pd.DataFrame, points: dict[str, pd.DataFrame]) -> li
     integrators in ``fixed``: through the finest point of the first integrator of that order, at ¼ of its error,
     over that integrator's range of kh."""
     lines = []
-    for order in sorted({REGISTRY[name].order for name in fixed["integrator"].unique()
-                         if name in REGISTRY and REGISTRY[name].order}):
+    for order in sorted({order for name in fixed["integrator"].unique()
+                         if name in REGISTRY and (order := REGISTRY[name].order)}):
         for name, rows in points.items():
             if name in REGISTRY and REGISTRY[name].order == order and len(rows) >= 2:
                 kh = rows["kh"].to_numpy(float)

@@ -18,6 +18,7 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import pandas as pd
@@ -132,9 +133,9 @@ def html_table(shown: pd.DataFrame) -> str:
     numeric = numeric_columns(shown)
     kinds = ["num" if str(column) in numeric else "text" for column in shown.columns]
     head = "".join(f"<th class='{kind}'>{html.escape(str(column)).replace('_', '_<wbr>')}</th>"
-                   for kind, column in zip(kinds, shown.columns))  # long column names may break after an _
+                   for kind, column in zip(kinds, shown.columns, strict=True))  # long column names may break after an _
     body = "\n".join("<tr>" + "".join(f"<td class='{kind}'>{html.escape(str(cell))}</td>"
-                                      for kind, cell in zip(kinds, row)) + "</tr>"
+                                      for kind, cell in zip(kinds, row, strict=True)) + "</tr>"
                       for row in shown.itertuples(index=False))
     return f"<table class='data'>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>"
 
@@ -233,7 +234,7 @@ def _anchors(blocks: list[Block]) -> dict[int, str]:
 def _interactive_html(block: Figure, number: int) -> str:
     """A plotly chart: its div (``data-points``: the markers it should draw) and the script drawing it."""
     chart_id = f"chart-{number}"
-    figure_json = block.interactive.replace("</", "<\\/")
+    figure_json = cast(str, block.interactive).replace("</", "<\\/")  # called for interactive figures only
     return (f"<figure><div class='chart' id='{chart_id}' data-points='{block.points}'></div><script>"
             f"(function () {{ var figure = {figure_json}; "
             f"Plotly.newPlot('{chart_id}', figure.data, figure.layout, {{responsive: true, displaylogo: false}})"

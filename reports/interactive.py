@@ -17,6 +17,7 @@ import math
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 import pandas as pd
 import plotly.graph_objects as go
 from matplotlib.collections import PolyCollection
@@ -239,14 +240,14 @@ def _ticks(axis) -> dict[str, Any]:
     return {"tickvals": positions, "ticktext": [str(text) for text in labels]}
 
 
-def _data_coordinates(axes, transform, xy: np.ndarray) -> np.ndarray:
+def _data_coordinates(axes, transform, xy: ArrayLike) -> np.ndarray:
     """Points given in ``transform``'s coordinates (data, axes fraction or a blend of both) in data
     coordinates, at the axes' current limits: a marker on an edge lands on that edge's value."""
     axes.get_xlim(), axes.get_ylim()  # applies pending autoscaling
     return (transform - axes.transData).transform(np.asarray(xy, dtype=float).reshape(-1, 2))
 
 
-def _axes_fractions(axes, transform, xy: np.ndarray) -> np.ndarray:
+def _axes_fractions(axes, transform, xy: ArrayLike) -> np.ndarray:
     return (transform - axes.transAxes).transform(np.asarray(xy, dtype=float).reshape(-1, 2))
 
 
@@ -326,10 +327,11 @@ def _add_patches(plot: go.Figure, axes, row: int, col: int) -> None:
     for collection in axes.collections:
         if not isinstance(collection, PolyCollection):
             continue
+        faces: Any = collection.get_facecolor()  # an N×4 RGBA array (typed as one colour)
         for path in collection.get_paths():
             data = _data_coordinates(axes, collection.get_transform(), path.vertices)
             plot.add_trace(go.Scatter(x=data[:, 0], y=data[:, 1], fill="toself", mode="lines", showlegend=False,
-                                      fillcolor=to_hex(collection.get_facecolor()[0], keep_alpha=True),
+                                      fillcolor=to_hex(faces[0], keep_alpha=True),
                                       line={"width": 0}, name=str(collection.get_label()), hoverinfo="skip"),
                           row=row, col=col)
 
@@ -355,17 +357,19 @@ def from_matplotlib(figure: MplFigure) -> go.Figure:
     of curves (study tables, the seed section), where hovering shows the curve and its x, y. A line without a
     label is named after its panel and left out of the legend when a labelled line of the same colour in the
     panel stands for it. Figures of several rows of panels get ``PANEL_HEIGHT_PX`` per row."""
-    panels = [axes for axes in figure.axes if axes.get_subplotspec() is not None and axes.get_visible()]
-    geometry = panels[0].get_subplotspec().get_geometry()[:2] if panels else (1, 1)
-    cells = {(axes.get_subplotspec().rowspan.start, axes.get_subplotspec().colspan.start): axes for axes in panels}
+    subplot_specs = {axes: spec for axes in figure.axes
+                     if (spec := axes.get_subplotspec()) is not None and axes.get_visible()}
+    geometry = next(iter(subplot_specs.values())).get_geometry()[:2] if subplot_specs else (1, 1)
+    cells = {(spec.rowspan.start, spec.colspan.start): axes for axes, spec in subplot_specs.items()}
     panels = [cells[key] for key in sorted(cells)]  # plotly numbers its panels row by row
-    specs = [[{} if (row, col) in cells else None for col in range(geometry[1])] for row in range(geometry[0])]
+    specs: list[list[dict | None]] = [[{} if (row, col) in cells else None for col in range(geometry[1])]
+                                      for row in range(geometry[0])]
     plot = make_subplots(rows=geometry[0], cols=geometry[1], horizontal_spacing=0.08, specs=specs,
                          vertical_spacing=min(0.3 / geometry[0], 0.12),
                          subplot_titles=[axes.get_title() for axes in panels])
     legend_names: set[str] = set()
     for axes in panels:
-        spec = axes.get_subplotspec()
+        spec = subplot_specs[axes]
         row, col = spec.rowspan.start + 1, spec.colspan.start + 1
         subplot = plot.get_subplot(row, col)
         x_ref, y_ref = (axis.plotly_name.replace("axis", "") for axis in (subplot.xaxis, subplot.yaxis))
@@ -379,7 +383,7 @@ def from_matplotlib(figure: MplFigure) -> go.Figure:
             reference = _reference_line(axes, line)
             if reference is not None:
                 style = {"line_color": to_hex(line.get_color()), "line_width": float(line.get_linewidth()),
-                         "line_dash": DASHES.get(line.get_linestyle(), "solid")}
+                         "line_dash": DASHES.get(str(line.get_linestyle()), "solid")}
                 if reference[0] == "v":
                     plot.add_vline(x=reference[1], row=row, col=col, **style)
                 else:

@@ -58,8 +58,9 @@ def _greek(character: str) -> str | None:
     name = unicodedata.name(character, "")
     match = re.fullmatch(r"GREEK (SMALL|CAPITAL) LETTER (FINAL )?(\w+)", name)
     if match is None:
-        name = {"GREEK PHI SYMBOL": "GREEK SMALL LETTER PHI", "GREEK THETA SYMBOL": "GREEK SMALL LETTER THETA"}.get(name)
-        match = name and re.fullmatch(r"GREEK (SMALL|CAPITAL) LETTER (FINAL )?(\w+)", name)
+        symbol = {"GREEK PHI SYMBOL": "GREEK SMALL LETTER PHI",
+                  "GREEK THETA SYMBOL": "GREEK SMALL LETTER THETA"}.get(name)
+        match = re.fullmatch(r"GREEK (SMALL|CAPITAL) LETTER (FINAL )?(\w+)", symbol) if symbol else None
     if not match:
         return None
     case, final, letter = match.groups()

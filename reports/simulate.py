@@ -30,6 +30,7 @@ most ``MAX_FRAMES`` frames at up to ``MAX_FPS`` frames per second. The computati
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import subprocess
@@ -37,6 +38,7 @@ import textwrap
 import uuid
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -351,8 +353,8 @@ class SimulationView:
         self.release_line.set_data(*map_view(ends * math.cos(release), ends * math.sin(release)))
         self.expected_line.set_data(*map_view(ends * math.cos(expected), ends * math.sin(expected)))
         bob = min(index, shown - 1)
-        self.bob.set_data(*map_view(result.numeric[bob:bob + 1, 0], result.numeric[bob:bob + 1, 1]) if shown
-                          else ([], []))
+        self.bob.set_data(*(map_view(result.numeric[bob:bob + 1, 0], result.numeric[bob:bob + 1, 1]) if shown
+                            else (np.empty(0), np.empty(0))))
         self.clock.set_text(f"t = {result.t_s[index] / 3600.0:.2f} h")
 
 
@@ -371,7 +373,7 @@ class InteractiveSimulation:
             start = min(max(getattr(settings, grid.attribute), grid.values[0]), grid.values[-1])  # e.g. rate 0
             slider = Slider(slider_axes, grid.label, grid.position(grid.values[0]), grid.position(grid.values[-1]),
                             valinit=grid.position(start))
-            slider.on_changed(lambda position, name=grid.attribute: self._changed(name, position))
+            slider.on_changed(functools.partial(self._changed, grid.attribute))
             self.sliders[grid.attribute] = slider
         self.bound_marks = {name: self.sliders[name].ax.axvline(math.nan, color="#b00000", linewidth=1.5)
                             for name in ("amplitude_m", "length_m")}
@@ -388,7 +390,7 @@ class InteractiveSimulation:
         if grid.position(allowed) != position:  # off the grid or past a bound: move there (which calls back)
             self.sliders[attribute].set_val(grid.position(allowed))
             return
-        self.view.update(replace(self.view.settings, **{attribute: allowed}))
+        self.view.update(replace(self.view.settings, **cast(dict[str, Any], {attribute: allowed})))
         self._show_values()
         self.view.figure.canvas.draw_idle()
 

@@ -711,7 +711,7 @@ def ensure_studies(store: TableStore | None, recompute: bool = False, configs: d
 def _with_config_columns(frame: pd.DataFrame, config: Any, exclude: tuple[str, ...]) -> pd.DataFrame:
     """Add the config's scalar fields as constant columns (``config_<field>``) so a stored table says how it
     was made."""
-    for name, value in asdict(config).items():
+    for name, value in asdict(cast(Any, config)).items():  # config: one of this module's dataclasses
         if name not in exclude:
             frame[f"config_{name}"] = value
     return frame

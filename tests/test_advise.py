@@ -96,7 +96,7 @@ def test_bad_input_is_exit_2_with_one_line_per_problem(tmp_path: Path, capsys, a
     assert cli_main(["advise", *arguments, "--db", str(tmp_path / "db.sqlite")]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == len(problems)
-    for line, problem in zip(lines, problems):
+    for line, problem in zip(lines, problems, strict=True):
         assert line.startswith("foucault-bench advise: error:") and problem in line
     assert not (tmp_path / "db.sqlite").exists()
 

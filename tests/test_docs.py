@@ -4,6 +4,7 @@ and nothing cites a file that is not in the repository."""
 
 from __future__ import annotations
 
+import math
 import re
 import shutil
 import subprocess
@@ -176,3 +177,120 @@ def test_generated_documents_get_the_notes_they_cite(tmp_path: Path) -> None:
     for path in written:
         source = ROOT / path.relative_to(tmp_path / "docs")
         assert path.read_text(encoding="utf-8") == source.read_text(encoding="utf-8")
+
+
+# --- counts and lists: checked against the registry, the matrices and the model list -------------------------
+
+NUMBER_WORDS = {"two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7, "eight": 8, "nine": 9, "ten": 10}
+MAIN_JOB = re.compile(r"The main job is (\d+) runs \((\d+) integrators × (\d+) scenes")
+DEFAULT_MATRIX_COUNTS = (
+    (re.compile(r"default matrix's (\d+) integrators"), ("integrators",)),
+    (re.compile(r"default matrix's results \((\d+) scenes"), ("scenes",)),
+)
+"""Other sentences that count what the default matrix holds (each checked wherever it appears)."""
+
+
+def flowing_text(path: Path) -> str:
+    """A document's text with line breaks inside paragraphs joined (a count may be split over two lines)."""
+    return re.sub(r"[ \t]*\n[ \t]*(?=\S)", " ", path.read_text(encoding="utf-8"))
+
+
+def markdown_rows(path: Path, header: str) -> list[list[str]]:
+    """The cells of the rows of the table whose header line starts with ``header`` (backticks removed)."""
+    lines = path.read_text(encoding="utf-8").splitlines()
+    start = next(number for number, line in enumerate(lines) if line.startswith(header))
+    rows = []
+    for line in lines[start + 2:]:
+        if not line.startswith("|"):
+            break
+        rows.append([cell.strip().replace("`", "") for cell in line.strip("|").split("|")])
+    return rows
+
+
+def default_matrix_counts() -> dict[str, int]:
+    matrix = load_matrix("default")
+    return {"runs": len(matrix.runs), "integrators": len({run.integrator for run in matrix.runs}),
+            "scenes": len(matrix.scenes)}
+
+
+def test_the_counts_of_the_default_matrix_in_the_docs_are_its_own() -> None:
+    """"The main job is 1323 runs (20 integrators × 9 scenes ...)": a new integrator, scene or setting in the
+    default matrix fails here until the README says so."""
+    actual = default_matrix_counts()
+    main = MAIN_JOB.findall(flowing_text(ROOT / "README.md"))
+    assert len(main) == 1, f"README.md: no sentence matching {MAIN_JOB.pattern!r} (the main job's size)"
+    stated = [("README.md", dict(zip(("runs", "integrators", "scenes"), map(int, main[0]), strict=True)))]
+    for doc in DOCS:
+        for pattern, names in DEFAULT_MATRIX_COUNTS:
+            for found in pattern.findall(flowing_text(doc)):
+                values = (found,) if isinstance(found, str) else found
+                stated.append((str(doc.relative_to(ROOT)), dict(zip(names, map(int, values), strict=True))))
+    wrong = [f"{doc}: {name} = {value}, the default matrix has {actual[name]}"
+             for doc, counts in stated for name, value in counts.items() if value != actual[name]]
+    assert not wrong, "\n".join(wrong)
+
+
+def test_the_readme_scene_table_is_the_default_matrix() -> None:
+    """README.md "The scenes": one row per scene of the default matrix, in its order, with the scene's model."""
+    from foucault_bench.bench.problems.scenes import SCENES
+
+    rows = markdown_rows(ROOT / "README.md", "| scene | pendulum | model |")
+    listed = [(row[0], row[2]) for row in rows]
+    expected = [(scene.name, SCENES[scene.name].model) for scene in load_matrix("default").scenes]
+    assert listed == expected, f"README.md's scene table lists {listed}; the default matrix has {expected}"
+
+
+def test_the_number_of_models_in_the_docs_is_the_number_of_models() -> None:
+    from foucault_bench.models import MODELS
+
+    stated = [(str(doc.relative_to(ROOT)), word) for doc in DOCS
+              for word in re.findall(r"\b(\w+) models\b", flowing_text(doc), flags=re.I)
+              if word.lower() in NUMBER_WORDS]
+    assert stated, "no document says how many models there are: the pattern no longer matches"
+    wrong = [f"{doc}: '{word} models', there are {len(MODELS)} ({', '.join(MODELS)})"
+             for doc, word in stated if NUMBER_WORDS[word.lower()] != len(MODELS)]
+    assert not wrong, "\n".join(wrong)
+
+
+def test_the_integrator_table_is_the_registry() -> None:
+    """integrators/README.md "The integrators": a row for every built-in integrator and none other, with the
+    family, order and stability limit each declares, and the stages of each fixed-step one (an adaptive one
+    declares none: its row gives the stages of one attempt)."""
+    from foucault_bench.integrators import REGISTRY, built_in_names
+
+    rows = {name.strip(): row for row in markdown_rows(ROOT / "integrators" / "README.md", "| name | family |")
+            for name in row[0].split(",")}
+    missing, extra = set(built_in_names()) - set(rows), set(rows) - set(built_in_names())
+    assert not missing and not extra, f"integrators/README.md's table: missing {sorted(missing)}, " \
+                                      f"not registered {sorted(extra)}"
+    wrong = []
+    for name, (_, family, order, stages, limit, *_) in rows.items():
+        integrator = REGISTRY[name]
+        if family != integrator.family:
+            wrong.append(f"{name}: family {family!r}, declared {integrator.family!r}")
+        declared_order = "variable" if integrator.order is None else str(integrator.order)
+        if order.split()[0].rstrip(",") != declared_order:
+            wrong.append(f"{name}: order {order!r}, declared {integrator.order}")
+        declared_stages = "–" if integrator.stages is None else str(integrator.stages)
+        if not integrator.adaptive and stages.split()[0] != declared_stages:  # adaptive: stages per attempt
+            wrong.append(f"{name}: stages {stages!r}, declared {integrator.stages}")
+        declared_limit = integrator.stability_limit_kh
+        numbers = [float(number) for number in re.findall(r"\d+(?:\.\d+)?", limit)]
+        if declared_limit is not None and not any(math.isclose(number, declared_limit, rel_tol=5e-4)
+                                                  for number in numbers):
+            wrong.append(f"{name}: stability limit {limit!r}, declared {declared_limit:.4g}")
+        if declared_limit is None and not integrator.adaptive and not limit.startswith("none"):
+            wrong.append(f"{name}: stability limit {limit!r}, declared none")
+    assert not wrong, "\n".join(wrong)
+
+
+def test_the_inline_scene_keys_in_bench_readme_are_the_ones_read() -> None:
+    """bench/README.md "Scenes": the keys an inline ``[scene.NAME]`` table may hold, and the required ones."""
+    from foucault_bench.bench.problems.scenes import REQUIRED_KEYS, SCENE_KEYS
+
+    text = flowing_text(ROOT / "bench" / "README.md")
+    keys_sentence = re.search(r"Keys: (.*?)\. Without `base`, (.*?) are required", text)
+    assert keys_sentence, "bench/README.md: the sentence listing an inline scene's keys is gone"
+    listed, required = (re.findall(r"`([a-z][a-z0-9_]*)`", part) for part in keys_sentence.groups())
+    assert sorted(listed) == sorted(set(SCENE_KEYS) - {"base"}), (listed, SCENE_KEYS)
+    assert sorted(required) == sorted(REQUIRED_KEYS), (required, REQUIRED_KEYS)

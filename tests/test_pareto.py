@@ -40,10 +40,11 @@ def test_front_is_exactly_the_undominated_ok_runs(seed: int) -> None:
     ok = frame[frame["status"] == "ok"]
     for scene, runs in ok.groupby("scene"):
         cost, error = runs["wall_time_s"].to_numpy(), runs["reference_error"].to_numpy()
-        dominated = [((cost <= c) & (error <= e) & ((cost < c) | (error < e))).any() for c, e in zip(cost, error)]
-        expected = set(zip(runs["integrator"][~np.array(dominated)], runs["kh"][~np.array(dominated)]))
+        dominated = [((cost <= c) & (error <= e) & ((cost < c) | (error < e))).any()
+                     for c, e in zip(cost, error, strict=True)]
+        expected = set(zip(runs["integrator"][~np.array(dominated)], runs["kh"][~np.array(dominated)], strict=True))
         scene_front = front[front["scene"] == scene]
-        assert set(zip(scene_front["integrator"], scene_front["kh"])) == expected
+        assert set(zip(scene_front["integrator"], scene_front["kh"], strict=True)) == expected
         assert scene_front["wall_time_s"].is_monotonic_increasing
         assert scene_front["error"].is_monotonic_decreasing
 

@@ -10,6 +10,7 @@ Solving ODEs I, §II.1): order 2, 2 stages, unstable on the undamped oscillator 
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -51,15 +52,62 @@ class ToyMidpoint(FixedStepIntegrator):
 '''
 
 
+ODD_PLUGIN_SOURCE = '''
+"""A second toy plug-in of the same new family, each of whose integrators breaks a fact that the project's tests
+check on the built-ins (``selftest`` is what judges a plug-in): a false stability limit, symplecticity and
+rotation law; a tableau beside the shipped ones; no declared cost basis."""
+
+from typing import ClassVar
+
+import numpy as np
+
+from foucault_bench.integrators import Integrator, Solution, register
+from foucault_bench.integrators.dopri5 import Dopri5
+from toy_plugin import ToyMidpoint
+
+
+@register
+class ToyOverclaimed(ToyMidpoint):
+    name: ClassVar[str] = "toy_overclaimed"
+    stability_limit_kh: ClassVar[float] = 1.5
+    symplectic: ClassVar[bool] = True
+
+    def rotation_growth_per_step(self, kh, rate_ratio):
+        return 1.0 + kh
+
+
+@register
+class ToyDopri(Dopri5):
+    name: ClassVar[str] = "toy_dopri"
+    family: ClassVar[str] = "toy-family"
+
+
+@register
+class ToyStill(Integrator):
+    """Stays at the release point; ``cost_basis`` left at its default, None."""
+
+    name: ClassVar[str] = "toy_still"
+    family: ClassVar[str] = "toy-family"
+    order: ClassVar[int | None] = None
+    adaptive: ClassVar[bool] = True
+    reference: ClassVar[str] = "none"
+
+    def _solve(self, problem, *, step_s, tol, monitor):
+        return Solution(t=problem.t_out, y=np.tile(problem.initial_state, (len(problem.t_out), 1)))
+'''
+
+
 @pytest.fixture(scope="module")
 def site(tmp_path_factory) -> Path:
     """A directory holding the plug-in module and its distribution metadata, as an installer leaves them."""
     site = tmp_path_factory.mktemp("site")
     (site / "toy_plugin.py").write_text(PLUGIN_SOURCE, encoding="utf-8")
+    (site / "toy_oddities.py").write_text(ODD_PLUGIN_SOURCE, encoding="utf-8")
     dist_info = site / "toy_plugin-0.1.dist-info"
     dist_info.mkdir()
     (dist_info / "METADATA").write_text("Metadata-Version: 2.1\nName: toy-plugin\nVersion: 0.1\n", encoding="utf-8")
-    (dist_info / "entry_points.txt").write_text("[foucault_bench.integrators]\ntoy_midpoint = toy_plugin\n",
+    (dist_info / "entry_points.txt").write_text("[foucault_bench.integrators]\ntoy_midpoint = toy_plugin\n"
+                                                "toy_oddities = toy_oddities\n",
                                                 encoding="utf-8")
     return site
 
@@ -73,21 +121,26 @@ def run(site: Path | None, *argv: str, timeout: float = 600) -> subprocess.Compl
 
 
 PROBE = textwrap.dedent("""
+    import json
     from foucault_bench.integrators import REGISTRY, is_built_in
     from foucault_bench.integrators.registry import ENTRY_POINT_MODULES
     from foucault_bench.bench.run.provenance import code_version
     toy = REGISTRY.get("toy_midpoint")
-    print(toy is not None and not is_built_in(toy), toy and toy.family, ENTRY_POINT_MODULES, code_version())
+    print(json.dumps({"loaded": toy is not None and not is_built_in(toy), "family": toy and toy.family,
+                      "modules": ENTRY_POINT_MODULES, "code_version": code_version()}))
 """)
 
 
 def test_entry_point_plug_in_is_loaded_and_enters_the_code_version(site: Path) -> None:
-    without = run(None, "-c", PROBE)
-    first = run(site, "-c", PROBE)
-    assert first.returncode == 0 and without.returncode == 0, first.stderr + without.stderr
-    loaded, family, modules, version = first.stdout.split(maxsplit=3)
-    assert (loaded, family, modules) == ("True", "toy-family", "['toy_plugin']"), first.stdout
-    assert without.stdout.split()[0] == "False"
+    """Other plug-ins installed beside it (entry points of the environment) change nothing here."""
+    results = {}
+    for label, directory in (("without", None), ("with", site)):
+        result = run(directory, "-c", PROBE)
+        assert result.returncode == 0, result.stderr
+        results[label] = json.loads(result.stdout)
+    assert results["with"]["loaded"] and results["with"]["family"] == "toy-family", results["with"]
+    assert "toy_plugin" in results["with"]["modules"] and "toy_plugin" not in results["without"]["modules"]
+    assert not results["without"]["loaded"]
     plugin = site / "toy_plugin.py"
     original = plugin.read_text(encoding="utf-8")
     plugin.write_text(original + "\n# edited\n", encoding="utf-8")
@@ -95,7 +148,9 @@ def test_entry_point_plug_in_is_loaded_and_enters_the_code_version(site: Path) -
         edited = run(site, "-c", PROBE)
     finally:
         plugin.write_text(original, encoding="utf-8")
-    assert len({version, edited.stdout.split()[-1], without.stdout.split()[-1]}) == 3  # --resume cannot reuse rows
+    versions = {results["with"]["code_version"], json.loads(edited.stdout)["code_version"],
+                results["without"]["code_version"]}
+    assert len(versions) == 3  # --resume cannot reuse rows
 
 
 def test_selftest_checks_the_installed_plug_in(site: Path) -> None:
@@ -106,11 +161,24 @@ def test_selftest_checks_the_installed_plug_in(site: Path) -> None:
 
 
 def test_the_project_suite_still_passes_with_the_plug_in_installed(site: Path) -> None:
-    """The tests that enumerate the registry or assert what the built-in matrices cover."""
+    """The tests that enumerate the registry or assert what the built-in matrices cover judge the built-ins only,
+    whatever plug-ins (here, ones that break what those tests check) are installed."""
+    probe = run(site, "-c", "from foucault_bench.integrators import REGISTRY; print(*REGISTRY)")
+    assert {"toy_midpoint", "toy_overclaimed", "toy_dopri", "toy_still"} <= set(probe.stdout.split()), probe.stderr
     result = run(site, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/test_matrix.py",
                  "tests/test_fixed_step.py", "tests/test_selftest.py", "tests/test_adaptive.py::test_declares_its_facts",
-                 "tests/test_adaptive.py::test_the_library_drivers_are_discovered")
+                 "tests/test_adaptive.py::test_the_library_drivers_are_discovered", "tests/test_structure.py",
+                 "tests/test_timing.py::test_every_built_in_integrator_says_how_its_cost_arises",
+                 "tests/test_tableau.py::test_the_shipped_tableaux_are_the_expected_ones",
+                 "tests/test_studies.py::test_stable_below_the_limit_and_blown_up_above_it",
+                 "tests/test_studies.py::test_measured_limits_match_the_declared_ones_without_rotation",
+                 "tests/test_studies.py::test_rotation_growth_is_measured_beside_its_law", timeout=1800)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-2000:]
+
+
+def test_selftest_judges_a_plug_in_that_overclaims(site: Path) -> None:
+    result = run(site, "-m", "foucault_bench.bench.cli", "selftest", "toy_overclaimed")
+    assert result.returncode != 0 and "FAIL" in result.stdout, result.stdout + result.stderr
 
 
 def test_a_broken_entry_point_plug_in_is_reported_not_fatal(tmp_path: Path) -> None:

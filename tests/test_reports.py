@@ -146,9 +146,9 @@ def test_png_figures_are_real_images(report: Path) -> None:
 
 def test_every_table_has_a_row_per_integrator_and_scene() -> None:
     runs = results_fixture()
-    present = set(zip(runs["scene"], runs["integrator"]))
+    present = set(zip(runs["scene"], runs["integrator"], strict=True))
     for table in (tables.per_integrator(runs), tables.convergence_orders(runs)):
-        assert set(zip(table["scene"], table["integrator"])) == present
+        assert set(zip(table["scene"], table["integrator"], strict=True)) == present
         assert len(table) == len(present)
     assert len(tables.compact_table(runs)) == len(tables.full_table(runs)) == len(runs)
     assert list(tables.full_table(runs).columns) == list(COLUMN_NAMES)

@@ -7,8 +7,10 @@ return a list as ``nfev`` or a state of the wrong shape, and crash their process
 
 from __future__ import annotations
 
+import fcntl
 import importlib
 import hashlib
+import io
 import os
 import signal
 import sqlite3
@@ -393,6 +395,13 @@ def test_a_task_past_its_time_limit_has_its_process_killed():
 
 
 def test_a_closed_output_pipe_ends_quietly(tmp_path):
+    """``results ... | head -n 1``: the reader closes the pipe after one line, the command ends with 141 and no
+    traceback. For the command to meet the closed pipe, its output must not fit in the pipe: a pipe holds 64 KiB on
+    Linux and the reader's ``readline`` takes up to 8 KiB more, and output that fits (400 short rows were 46 kB)
+    may all be written, and the command end with 0, before the reader closes its end. Each row's message makes the
+    output 4 times that; the command then blocks on the full pipe until the reader has closed it, whatever the
+    scheduling."""
+    message = "m" * 750  # 400 rows: 300 kB of messages alone
     matrix = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4"],
                            "kh": [0.2 * 0.999**index for index in range(400)]})
     database = tmp_path / "many.sqlite"
@@ -400,10 +409,12 @@ def test_a_closed_output_pipe_ends_quietly(tmp_path):
         matrix_id, _ = store.start_matrix_run(matrix, jobs=1, scheduler=None, resume=False)
         for spec in matrix.runs:
             store.write_run({"run_key": spec.run_key, "matrix_id": matrix_id, "scene": spec.scene.name,
-                             "integrator": spec.integrator, "kh": spec.kh, "status": "ok", "message": ""})
+                             "integrator": spec.integrator, "kh": spec.kh, "status": "ok", "message": message})
         store.finish_matrix_run(matrix_id)
     process = subprocess.Popen([sys.executable, "-m", "foucault_bench.bench.cli", "results", "--db", str(database),
                                 "--all", "--csv", "/dev/stdout"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    pipe_capacity = fcntl.fcntl(process.stdout, fcntl.F_GETPIPE_SZ) if hasattr(fcntl, "F_GETPIPE_SZ") else 65536
+    assert len(matrix.runs) * len(message) > 4 * (pipe_capacity + io.DEFAULT_BUFFER_SIZE)
     assert process.stdout.readline().startswith(b"run_key")
     process.stdout.close()  # like `| head -n 1`
     assert process.wait(timeout=60) == 128 + signal.SIGPIPE

@@ -294,14 +294,16 @@ def test_the_window_has_a_name() -> None:
         plt.close(simulation.view.figure)
 
 
-def test_help_shows_defaults_and_choices() -> None:
+def test_help_shows_defaults_and_an_unknown_name_lists_the_choices() -> None:
     from foucault_bench.integrators.registry import REGISTRY
     from foucault_bench.models import MODELS
 
     parser = argparse.ArgumentParser(prog="foucault-bench simulate")
     add_arguments(parser)
+    with pytest.raises(InputError) as error:
+        settings_from_args(parser.parse_args(["--integrator", "nope", "--model", "nope"]))
+    assert all(name in " ".join(error.value.problems) for name in [*REGISTRY, *MODELS])
     text = " ".join(parser.format_help().split())
-    assert all(name in text for name in [*REGISTRY, *MODELS])
     defaults = SimulationSettings()
     for value in (defaults.latitude_deg, defaults.length_m, defaults.amplitude_m, defaults.hours):
         assert f"(default: {value})" in text

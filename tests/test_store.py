@@ -50,7 +50,7 @@ def test_rows_round_trip_bit_for_bit_with_nan_as_missing(filled):
     frame = store.frame()
     assert list(frame.columns) == list(COLUMN_NAMES)
     assert list(frame["run_key"]) == [row["run_key"] for row in rows]
-    for (_, stored), row in zip(frame.iterrows(), rows):
+    for (_, stored), row in zip(frame.iterrows(), rows, strict=True):
         for column in ("energy_max_rel_error", "energy_drift_per_s", "precession_rate_rad_s", "wall_time_s"):
             assert np.float64(stored[column]).tobytes() == np.float64(row[column]).tobytes()
         assert int(stored["nfev"]) == int(row["nfev"])

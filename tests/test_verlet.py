@@ -72,7 +72,7 @@ def test_verlet_precession_error_on_the_sphere_depends_on_the_release_direction(
     errors = {}
     for kh in (0.05, 0.025):
         table = precession_vs_release_azimuth(dataclasses.replace(config, kh=kh), progress=False)
-        errors[kh] = dict(zip(table["release_azimuth_deg"], table["error_earth"]))
+        errors[kh] = dict(zip(table["release_azimuth_deg"], table["error_earth"], strict=True))
     assert errors[0.05][0.0] / errors[0.025][0.0] == pytest.approx(4.0, rel=0.15)
     for kh in errors:
         assert errors[kh][0.0] >= 10 * errors[kh][90.0]

@@ -50,6 +50,7 @@ def main(args: argparse.Namespace) -> int:
         problems.append(problem)
     if problems:
         raise InputError(problems)
+    assert scene is not None and target is not None  # each comes with a problem when it is None
     jobs = None if args.no_search else (args.jobs or available_cores())
     with ResultsStore(args.db, create=not args.no_search) as store:
         answer = advise(store, scene, target, search_jobs=jobs, progress=not args.json and sys.stderr.isatty())

@@ -14,28 +14,22 @@ from foucault_bench.reports.simulation_settings import SimulationSettings
 
 
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
-    """Help with each option's default and, for ``--integrator`` and ``--model``, the registered choices (looked
-    up only when the help is shown, so that parsing imports no integrator)."""
+    """Help with each option's default. The choices of ``--integrator`` and ``--model`` are not listed: finding
+    them imports every integrator and model (numpy, numba, scipy: over a second), which ``--help`` must not
+    wait for; a name that is not registered is answered with the list (``settings_from_args``)."""
 
     def _get_help_string(self, action: argparse.Action) -> str | None:
-        text = action.help if action.default is None else super()._get_help_string(action)
-        if action.dest == "integrator":
-            from foucault_bench.integrators.registry import REGISTRY
-
-            return f"{text}; one of: {', '.join(sorted(REGISTRY))}"
-        if action.dest == "model":
-            from foucault_bench.models import MODELS
-
-            return f"{text}; one of: {', '.join(MODELS)}"
-        return text
+        return action.help if action.default is None else super()._get_help_string(action)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     defaults = SimulationSettings()
     parser.formatter_class = _HelpFormatter
-    parser.add_argument("--integrator", metavar="NAME", default=defaults.integrator, help="registered integrator")
+    parser.add_argument("--integrator", metavar="NAME", default=defaults.integrator,
+                        help="registered integrator (an unknown name is answered with the list)")
     parser.add_argument("--model", metavar="NAME", default=defaults.model,
-                        help="model (linear is the model of the exact-solution overlay)")
+                        help="model (linear is the model of the exact-solution overlay; an unknown name is answered "
+                        "with the list)")
     parser.add_argument("--hours", type=float, default=defaults.hours, help="simulated time (h)")
     parser.add_argument("--kh", type=float, default=None,
                         help="k·h for a fixed-step integrator, > 0 and at most one output interval (1/16 of a "

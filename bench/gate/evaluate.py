@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import pandas as pd
 
@@ -84,7 +85,9 @@ def evaluate(thresholds: Thresholds, frame: pd.DataFrame) -> list[Outcome]:
             if bound.kind == "max_abs":
                 value = abs(value)
             elif bound.kind == "max_ratio":
+                assert bound.relative_to is not None  # a max_ratio bound has one (thresholds._parse_bound)
                 other = counterpart_row(frame, row, bound.relative_to)
+                assert other is not None  # refused before evaluating (select.validate_against)
                 other_value = as_float(other[bound.column])
                 detail = (f"{bound.relative_to.integrator} {setting_label(other['kh'], other['tol'])}: "
                           f"{other_value:.3g}")
@@ -100,6 +103,7 @@ def _numeric_outcome(bound: Bound, scene: str, integrator: str, setting: str, va
     if not math.isfinite(value):
         detail = "; ".join(filter(None, [detail, "no finite value measured"]))
         return Outcome(bound, scene, integrator, setting, value, None, False, detail)
-    margin, is_factor = headroom(bound.kind, value, bound.limit)
-    return Outcome(bound, scene, integrator, setting, value, margin, _holds(bound.kind, value, bound.limit), detail,
+    limit = cast(float, bound.limit)  # a number for every kind but status
+    margin, is_factor = headroom(bound.kind, value, limit)
+    return Outcome(bound, scene, integrator, setting, value, margin, _holds(bound.kind, value, limit), detail,
                    is_factor)

@@ -9,7 +9,7 @@ the rows a matrix will produce (``planned_rows``), so bad input is reported befo
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence, cast
 
 import numpy as np
 import pandas as pd
@@ -87,8 +87,9 @@ def counterpart_row(frame: pd.DataFrame, row: pd.Series, counterpart: Counterpar
     same = frame[(frame["scene"] == row["scene"]) & (frame["integrator"] == counterpart.integrator)]
     fixed = counterpart.kh is not None or counterpart.tol is not None
     kh, tol = (counterpart.kh, counterpart.tol) if fixed else (as_float(row["kh"]), as_float(row["tol"]))
-    kh, tol = ((kh,) if pd.notna(kh) else ()), ((tol,) if pd.notna(tol) else ())
-    found = [other for _, other in same.iterrows() if _setting_matches(other, kh, tol, None, None)]
+    khs: tuple[float, ...] = (cast(float, kh),) if pd.notna(kh) else ()
+    tols: tuple[float, ...] = (cast(float, tol),) if pd.notna(tol) else ()
+    found = [other for _, other in same.iterrows() if _setting_matches(other, khs, tols, None, None)]
     return found[0] if found else None
 
 def validate_against(thresholds: Thresholds, frame: pd.DataFrame, *, what: str) -> None:
@@ -137,6 +138,7 @@ def validate_against(thresholds: Thresholds, frame: pd.DataFrame, *, what: str) 
         elif bound.kind == "min_order":
             problems += _sweep_problems(rows, where)
         elif bound.kind == "max_ratio":
+            assert bound.relative_to is not None  # a max_ratio bound has one (thresholds._parse_bound)
             missing = sorted({f"{row['scene']} {setting_label(row['kh'], row['tol'])}" for _, row in rows.iterrows()
                               if counterpart_row(frame, row, bound.relative_to) is None})
             if missing:

@@ -42,7 +42,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.schema import COLUMN_NAMES, VERDICT_COLUMNS
@@ -118,6 +118,7 @@ class Bound:
         if self.kind == "min_order":
             return f"order of {self.column} >= {self.limit:g}"
         if self.kind == "max_ratio":
+            assert self.relative_to is not None
             return f"{self.column} / {self.relative_to.integrator}'s <= {self.limit:g}"
         operator = {"max": "<=", "min": ">=", "max_abs": "<="}[self.kind]
         column = f"abs({self.column})" if self.kind == "max_abs" else self.column
@@ -194,7 +195,7 @@ def parse_thresholds(document: dict[str, Any], *, source: str = "thresholds",
         bound = _parse_bound(number, table, lambda message, where=where, own=own: own.append(f"{where}: {message}"))
         problems += own
         if not own:
-            bounds.append(bound)
+            bounds.append(cast(Bound, bound))  # None only with a problem reported
     if problems:
         raise InputError(problems)
     return Thresholds(description=description, matrix=matrix, bounds=tuple(bounds), source=source,

@@ -24,6 +24,7 @@ from __future__ import annotations
 import statistics
 import time
 from dataclasses import replace
+from functools import partial
 from typing import Any, Callable
 
 import numpy as np
@@ -157,7 +158,7 @@ def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
     rows, table = [], []
     for name, make_bare in BARE.items():
         integrator = get_integrator(name)
-        adapter = lambda: integrator.solve(problem, tol=TOL, monitor=False)  # noqa: E731  (as the runner times it)
+        adapter = partial(integrator.solve, problem, tol=TOL, monitor=False)  # as the runner times it
         bare = make_bare(problem)
         solution, reference = adapter(), bare()
         difference = np.max(np.abs(solution.y[-1] - _final_state(reference)))
@@ -187,8 +188,8 @@ def jacobian_effect(problem, rounds: int) -> list[Row]:
     for cls in (CvodeAdams, CvodeBdf):
         analytic, quotients = cls(analytic_jacobian=True), cls(analytic_jacobian=False)
         with_jac, without = analytic.solve(problem, tol=TOL, monitor=False), quotients.solve(problem, tol=TOL, monitor=False)
-        times = interleaved({"analytic": lambda: analytic.solve(problem, tol=TOL, monitor=False),
-                             "quotients": lambda: quotients.solve(problem, tol=TOL, monitor=False)}, rounds)
+        times = interleaved({"analytic": partial(analytic.solve, problem, tol=TOL, monitor=False),
+                             "quotients": partial(quotients.solve, problem, tol=TOL, monitor=False)}, rounds)
         rows.append(Row(SECTION, f"{cls.name}: analytic Jacobian / difference quotients (time)",
                         median_ratio(times["analytic"], times["quotients"]), "×",
                         note=f"nfev {with_jac.nfev} vs {without.nfev} (incl. 4 per quotient Jacobian), "

@@ -33,7 +33,8 @@ def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
         cold_s = sum(entry["compile_s"] for entry in cold["models"])
         warm_s = sum(entry["compile_s"] for entry in warm["models"])
         statuses = sorted({entry["status"] for entry in cold["models"] + warm["models"]})
-        table.append([name, len(models), f"{cold_s:.2f}", f"{warm_s:.2f}", f"{warm_s / cold_s:.2f}" if cold_s else "–",
+        table.append([name, str(len(models)), f"{cold_s:.2f}", f"{warm_s:.2f}",
+                      f"{warm_s / cold_s:.2f}" if cold_s else "–",
                       f"{warm['import_s']:.2f}", ",".join(statuses)])
         rows.append(Row(SECTION, f"{name}: compile cold ({len(models)} model(s))", cold_s, "s",
                         note=f"warm {warm_s:.2f} s, import {warm['import_s']:.2f} s"))

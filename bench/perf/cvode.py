@@ -16,6 +16,7 @@ time in interleaved rounds, medians (``bench.perf.measure.interleaved``).
 from __future__ import annotations
 
 import statistics
+from functools import partial
 
 from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio
 from foucault_bench.bench.problems.scenes import SCENES
@@ -44,10 +45,11 @@ def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
             rows.append(Row(SECTION, f"cvode_{method}: compiled vs scikit-sundae", None, "µs",
                             note=f"paths disagree (nfev {fast.nfev} vs {slow.nfev}; {fast.message or slow.message})"))
             continue
-        times = interleaved({"compiled": lambda solver=compiled: solver.solve(problem, tol=TOL),
-                             "python": lambda solver=python: solver.solve(problem, tol=TOL)}, rounds)
+        times = interleaved({"compiled": partial(compiled.solve, problem, tol=TOL),
+                             "python": partial(python.solve, problem, tol=TOL)}, rounds)
         compiled_s, python_s = statistics.median(times["compiled"]), statistics.median(times["python"])
         ratio = median_ratio(times["python"], times["compiled"])
+        assert fast.nfev is not None  # CVODE counts its evaluations
         per_rhs_compiled, per_rhs_python = compiled_s / fast.nfev * 1e6, python_s / fast.nfev * 1e6
         table.append([method, str(fast.nfev), str(fast.njev), str(fast.steps), str(fast.rejected_steps),
                       f"{compiled_s * 1e3:.2f}", f"{python_s * 1e3:.1f}", f"{per_rhs_compiled:.3f}",

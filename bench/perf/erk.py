@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import statistics
+from functools import partial
 
 from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio
 from foucault_bench.bench.problems.scenes import SCENES
@@ -48,8 +49,8 @@ def measure(quick: bool = False) -> list[Row]:
             if (mine.status, mine.nfev, mine.steps) != (theirs.status, theirs.nfev, theirs.steps):
                 raise AssertionError(f"{compiled_name} and {scipy_name} took different steps: "
                                      f"nfev {mine.nfev} vs {theirs.nfev}, steps {mine.steps} vs {theirs.steps}")
-            times = interleaved({"compiled": lambda: compiled.solve(problem, tol=TOL, monitor=monitor),
-                                 "scipy": lambda: python_driven.solve(problem, tol=TOL, monitor=monitor)}, rounds)
+            times = interleaved({"compiled": partial(compiled.solve, problem, tol=TOL, monitor=monitor),
+                                 "scipy": partial(python_driven.solve, problem, tol=TOL, monitor=monitor)}, rounds)
             ratio = median_ratio(times["compiled"], times["scipy"])
             compiled_s, scipy_s = statistics.median(times["compiled"]), statistics.median(times["scipy"])
             what = "with the turning-point event" if monitor else "to the output grid"

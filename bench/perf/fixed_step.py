@@ -21,12 +21,13 @@ from __future__ import annotations
 
 import statistics
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
 from foucault_bench.bench.perf.c_loops import MODELS, SCHEMES, CLoops, CompilerMissing, compile_c_loops
 from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio
-from foucault_bench.integrators import get_integrator
+from foucault_bench.integrators import FixedStepIntegrator, get_integrator
 from foucault_bench.models import MODELS as MODEL_REGISTRY
 from foucault_bench.models import PendulumParameters
 
@@ -61,7 +62,7 @@ class LoopPair:
 
     def __init__(self, c_loops: CLoops, model: str, scheme: str, n_steps: int) -> None:
         self.c_loops, self.model, self.scheme, self.n_steps = c_loops, model, scheme, n_steps
-        self.kernel = get_integrator(scheme).kernel(MODEL_REGISTRY[model])
+        self.kernel = cast(FixedStepIntegrator, get_integrator(scheme)).kernel(MODEL_REGISTRY[model])
         self.state0 = PARAMS.initial_state()
         self.p = PARAMS.parameter_vector()
         self.h = KH / PARAMS.pendulum_frequency_rad_s

@@ -107,11 +107,10 @@ def jobs_limit(quick: bool) -> tuple[list[Row], list[list[str]]]:
 
     with tempfile.TemporaryDirectory(prefix="foucault-perf-jobs-") as directory:
         root = Path(directory)
+        matrix: Path | str = "default"
         if quick:
             matrix = root / "jobs-check.toml"
             matrix.write_text(quick_jobs_matrix(), encoding="utf-8")
-        else:
-            matrix = "default"
         walls, frames = {}, {}
         for jobs in (1, 2):
             walls[jobs] = run_with_jobs(str(matrix), jobs, root / f"jobs{jobs}.sqlite")

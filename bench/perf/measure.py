@@ -96,7 +96,7 @@ def interleaved(calls: dict[str, Callable[[], Any]], rounds: int,
 
 def median_ratio(numerator: list[float], denominator: list[float]) -> float:
     """Median over rounds of the per-round ratio numerator/denominator (see the module docstring)."""
-    return statistics.median(a / b for a, b in zip(numerator, denominator))
+    return statistics.median(a / b for a, b in zip(numerator, denominator, strict=True))
 
 
 def cache_environment(root: Path) -> dict[str, str]:

@@ -19,6 +19,10 @@ import json
 import statistics
 import sys
 import time
+from typing import TYPE_CHECKING, Any, cast
+
+if TYPE_CHECKING:
+    from foucault_bench.integrators import FixedStepIntegrator, StreamedMetrics
 
 MEMORY_OUTPUTS = 1000
 
@@ -44,7 +48,8 @@ def compile_probe(integrator_name: str, model_names: list[str]) -> dict:
     params = _probe_parameters()
     period = params.small_swing_period_s
     if integrator.adaptive:
-        setting = {"tol": REFERENCE_TOLERANCE if integrator_name == "heyoka_taylor_quad" else PROBE_TOLERANCE}
+        setting: dict[str, Any] = {
+            "tol": REFERENCE_TOLERANCE if integrator_name == "heyoka_taylor_quad" else PROBE_TOLERANCE}
     else:
         setting = {"step_s": period / 64}
     results = []
@@ -74,14 +79,14 @@ def memory_probe(integrator_name: str, model_name: str, steps: int, span_kh: flo
     params = _probe_parameters()
     span = span_kh / params.pendulum_frequency_rad_s
     problem = Problem(MODELS[model_name], params, np.linspace(0.0, span, MEMORY_OUTPUTS + 1))
-    integrator = get_integrator(integrator_name)
+    integrator = cast("FixedStepIntegrator", get_integrator(integrator_name))
     integrator.compile(problem.model)
     before_mb = peak_rss_mb()
     start = time.perf_counter()
     solution = integrator.solve(problem, step_s=span / steps, monitor=True)
     run_s = time.perf_counter() - start
     return {"integrator": integrator_name, "model": model_name, "steps": solution.steps, "status": solution.status,
-            "turning_points": len(solution.streamed.turning_points), "before_mb": before_mb,
+            "turning_points": len(cast("StreamedMetrics", solution.streamed).turning_points), "before_mb": before_mb,
             "peak_mb": peak_rss_mb(), "run_s": run_s}
 
 

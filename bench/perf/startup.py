@@ -87,7 +87,7 @@ def probe(matrix_path: str) -> dict[str, float]:
             marks.append(time.perf_counter())
             summary_text(store.records(matrix_id))
             marks.append(time.perf_counter())
-    return {piece: end - start for piece, start, end in zip(PIECES, marks, marks[1:])}
+    return {piece: end - start for piece, start, end in zip(PIECES, marks[:-1], marks[1:], strict=True)}
 
 
 def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
@@ -104,10 +104,10 @@ def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
     with tempfile.TemporaryDirectory(prefix="foucault-perf-startup-") as directory:
         matrix_path = Path(directory) / "startup_small.toml"
         matrix_path.write_text(SMALL_MATRIX, encoding="utf-8")
-        command = _cli("run", "--matrix", str(matrix_path), "--jobs", "1", "--no-progress",
-                       "--db", str(Path(directory) / "runs.sqlite"))
-        _median_wall(command, 1)  # fills the caches
-        median_s, walls = _median_wall(command, repeats)
+        run_command = _cli("run", "--matrix", str(matrix_path), "--jobs", "1", "--no-progress",
+                           "--db", str(Path(directory) / "runs.sqlite"))
+        _median_wall(run_command, 1)  # fills the caches
+        median_s, walls = _median_wall(run_command, repeats)
         load = ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "?"
         rows.append(Row(SECTION, "5-run matrix, warm caches, run --jobs 1: wall time", median_s, "s",
                         TARGET_SMALL_MATRIX_S, f"median of {repeats}: {', '.join(f'{wall:.2f}' for wall in walls)} s; "

@@ -129,7 +129,7 @@ def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
     for name, durations in times.items():
         wall_s = statistics.median(durations)
         steps = outcomes[name][0]
-        table.append([name, f"{wall_s:.3f}", steps, f"{steps / wall_s:.3g}", f"{scalar_s / wall_s:.2f}"])
+        table.append([name, f"{wall_s:.3f}", str(steps), f"{steps / wall_s:.3g}", f"{scalar_s / wall_s:.2f}"])
         if name != "scalar loop":
             rows.append(Row(SECTION, f"{N_PENDULUMS}-latitude sweep: {name} / scalar loop, throughput",
                             (steps / wall_s) / (outcomes["scalar loop"][0] / scalar_s), "×",

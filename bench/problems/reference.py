@@ -29,7 +29,7 @@ import time
 from dataclasses import dataclass
 from importlib.metadata import version
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -87,7 +87,7 @@ def sources_version() -> str:
     """SHA-256 (16 hex digits) of the sources that determine a reference trajectory, and heyoka's version
     (``bench.run.provenance.source_digest``; the version from the package metadata: importing heyoka to read
     it would cost a worker about 0.7 s)."""
-    integrator_module = Path(inspect.getsourcefile(type(get_integrator(REFERENCE_INTEGRATOR)))).resolve()
+    integrator_module = Path(cast(str, inspect.getsourcefile(type(get_integrator(REFERENCE_INTEGRATOR))))).resolve()
     sources = sorted((PACKAGE_ROOT / "models").glob("*.py"))
     sources += [integrator_module, PACKAGE_ROOT / "integrators" / "adaptive.py"]
     return source_digest(f"heyoka {version('heyoka')}; format {CACHE_FORMAT}", dict.fromkeys(sources))

@@ -35,7 +35,7 @@ import sys
 import threading
 import time
 import uuid
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, Iterator, cast
 
 from foucault_bench.bench.errors import InputError, RunInterrupted
 from foucault_bench.bench.run.worker import IDLE_EXIT_S, STARTED, WorkerProcess, warm_up
@@ -63,7 +63,7 @@ def _outcome_value(task: tuple, outcome: tuple[str, Any], on_failure: Callable, 
     if kind == "ok":
         return value
     if kind == "timeout":
-        return on_failure(*task, status=STATUS_TIMEOUT, reason=timeout_message(timeout_s))
+        return on_failure(*task, status=STATUS_TIMEOUT, reason=timeout_message(cast(float, timeout_s)))
     if kind == "died":
         return on_failure(*task, status=STATUS_FAILED, reason=WORKER_DIED)
     return on_failure(*task, status=STATUS_FAILED, reason=f"worker: {value}")
@@ -114,7 +114,8 @@ class LocalExecutor:
                 self.busy[worker] = (task, attempt)
             next_deadline = min(worker.deadline(timeout_s) for worker in self.busy)
             wait_s = None if next_deadline == float("inf") else max(0.0, next_deadline - time.monotonic())
-            for worker in multiprocessing.connection.wait(list(self.busy), timeout=wait_s):
+            busy: list[Any] = list(self.busy)  # WorkerProcess objects: wait() takes anything with a fileno()
+            for worker in cast("list[WorkerProcess]", multiprocessing.connection.wait(busy, timeout=wait_s)):
                 outcome = worker.next_message()
                 if outcome is not None and outcome[0] == STARTED:  # its time limit counts from now
                     continue

@@ -47,7 +47,7 @@ import signal
 import sys
 import threading
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Iterator
+from typing import TYPE_CHECKING, Any, Iterator, cast
 
 from tqdm import tqdm
 
@@ -221,7 +221,7 @@ def checked_row(row: Any, spec: RunSpec, matrix_id: str) -> dict[str, Any]:
     first value that does not: a row that reached the main process is always storable."""
     if not isinstance(row, dict) or set(row) - set(COLUMN_NAMES) or row.get("run_key") != spec.run_key:
         return run_failure(spec, matrix_id, STATUS_FAILED, f"malformed row: {type(row).__name__} {row!r:.80}")
-    plain = {}
+    plain: dict[str, Any] = {}
     for column in COLUMNS:
         value = row.get(column.name)
         try:
@@ -239,7 +239,7 @@ def checked_row(row: Any, spec: RunSpec, matrix_id: str) -> dict[str, Any]:
 def _estimated_cost(spec: RunSpec) -> tuple:
     """Sort key putting the likely longest runs first (a longest-processing-time-first heuristic)."""
     periods = spec.scene.duration_s / spec.scene.params.small_swing_period_s
-    fineness = 1.0 / spec.kh if spec.kh is not None else 1.0 / spec.tol
+    fineness = 1.0 / spec.kh if spec.kh is not None else 1.0 / cast(float, spec.tol)
     return (spec.kh is not None, -periods, -fineness)
 
 

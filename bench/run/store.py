@@ -31,7 +31,7 @@ import sqlite3
 import uuid
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Mapping, TypeVar
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Mapping, Sequence, TypeVar
 
 from foucault_bench.bench.errors import InputError, database_error_types
 from foucault_bench.bench.problems.scene_key import UNKNOWN_KEY_LABEL, label_map, scene_labels
@@ -526,7 +526,7 @@ class ResultsStore:
         cursor = self.connection.execute(f"SELECT {self._run_columns} FROM {RUNS_TABLE} WHERE matrix_id = ? ORDER BY rowid",
                                          (self.resolve_matrix_id(matrix_id),))
         names = [description[0] for description in cursor.description]
-        return [dict(zip(names, values)) for values in cursor]
+        return [dict(zip(names, values, strict=True)) for values in cursor]
 
     # --- adequacy and study tables --------------------------------------------------------------------------
 
@@ -594,7 +594,7 @@ class ResultsStore:
             self._writer = sqlite3.connect(self.path, timeout=30.0)
         return self._writer
 
-    def _append(self, name: str, columns: list[str], records: list[Mapping[str, Any]],
+    def _append(self, name: str, columns: list[str], records: Sequence[Mapping[str, Any]],
                 connection: sqlite3.Connection | None = None) -> None:
         """Append ``records`` (mappings; a missing key is NULL) to table ``name``, creating the table with
         ``columns`` or adding the columns it lacks. Plain ``sqlite3``: the runner stores adequacy rows without

@@ -127,6 +127,7 @@ class WorkerProcess:
 
     def fileno(self) -> int:
         """The outcome channel, for ``multiprocessing.connection.wait`` or ``select``."""
+        assert self.process.stdout is not None  # a pipe (__init__)
         return self.process.stdout.fileno()
 
     def alive(self) -> bool:
@@ -150,6 +151,7 @@ class WorkerProcess:
         return self.started_at + timeout_s
 
     def _send(self, value: Any) -> bool:
+        assert self.process.stdin is not None  # a pipe (__init__)
         try:
             write_message(self.process.stdin.fileno(), value)
         except (OSError, ValueError):  # a closed pipe: the worker is gone
@@ -184,7 +186,7 @@ class WorkerProcess:
             return "died", None
         while True:
             wait_s = min(1.0, max(0.0, self.deadline(timeout_s) - time.monotonic()))
-            ready, _, _ = select.select([self.process.stdout], [], [], wait_s)
+            ready, _, _ = select.select([self], [], [], wait_s)
             if ready:
                 message = self.next_message()
                 if message is None:
@@ -208,6 +210,7 @@ class WorkerProcess:
 
     def close(self) -> None:
         """Let an idle worker exit (end-of-file on its stdin), killing it if it has not within a few seconds."""
+        assert self.process.stdin is not None  # a pipe (__init__)
         try:
             self.process.stdin.close()
         except OSError:
@@ -219,7 +222,7 @@ class WorkerProcess:
         self._close_pipes()
 
     def _close_pipes(self) -> None:
-        for pipe in (self.process.stdin, self.process.stdout):
+        for pipe in filter(None, (self.process.stdin, self.process.stdout)):
             try:
                 pipe.close()
             except OSError:

@@ -97,7 +97,7 @@ def _front(runs: pd.DataFrame) -> pd.DataFrame:
 def _identity(runs: pd.DataFrame, metric: str, cost: str) -> pd.DataFrame:
     return pd.DataFrame({
         "scene": runs["scene"], "metric": metric, "integrator": runs["integrator"], "family": runs["family"],
-        "setting": [setting_label(kh, tol) for kh, tol in zip(runs["kh"], runs["tol"])],
+        "setting": [setting_label(kh, tol) for kh, tol in zip(runs["kh"], runs["tol"], strict=True)],
         "kh": runs["kh"], "tol": runs["tol"], "error": runs["error"], cost: runs["cost"],
     })
 
