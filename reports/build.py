@@ -146,7 +146,7 @@ class _Builder:
 
     def table(self, frame: pd.DataFrame, name: str, title: str, notes: dict[str, str] | None = None,
               collapsible: bool = False) -> None:
-        shown = write_table_files(frame, self.folder, f"{TABLES}/{name}", title, tables.INTEGER_COLUMNS)
+        shown = write_table_files(frame, self.folder, f"{TABLES}/{name}", title, tables.COLUMN_FORMATS)
         self.add(Table(title, shown, f"{TABLES}/{name}", tables.notes_for(frame, notes), collapsible))
 
 
@@ -184,7 +184,7 @@ def _overview(builder: _Builder, inputs: ReportInputs) -> None:
         "positive; rates counter-clockwise about up positive (the textbook rate is −Ω_E sin φ)."))
     names = sorted(runs["scene"].unique())
     builder.add(Heading("Scenes", level=3))
-    builder.table(tables.scenes_table([SCENES[name] for name in names if name in SCENES], names), "scenes",
+    builder.table(tables.scenes_table([SCENES[name] for name in names if name in SCENES], runs), "scenes",
                   "The scenes: place, pendulum, release, grid, model and why")
 
 
@@ -212,7 +212,7 @@ def _decisions(builder: _Builder, runs: pd.DataFrame, targets: tuple[float, ...]
                                (families, "best_of_family", "Best run of each family per scene (reference error)")):
         builder.table(frame[frame["metric"] == "reference_error"] if not frame.empty else frame, stem, title)
         write_table_files(frame, builder.folder, f"{TABLES}/{stem}_all_metrics", f"{title[:title.index(' (')]}, "
-                          "every error metric", tables.INTEGER_COLUMNS)
+                          "every error metric", tables.COLUMN_FORMATS)
     builder.add(Paragraph(
         f"The same for every error metric (energy error and drift, precession-rate error, analytic gap): "
         f"`{TABLES}/pareto_fronts_all_metrics.csv` and `{TABLES}/best_of_family_all_metrics.csv` (also .md, .tex, "
@@ -390,7 +390,7 @@ def _all_runs(builder: _Builder, runs: pd.DataFrame) -> None:
         "second table hold every column of foucault_bench.bench.schema."))
     builder.table(tables.compact_table(runs), "runs_compact", "All runs (main columns)", collapsible=True)
     full = tables.full_table(runs)
-    write_table_files(full, builder.folder, f"{TABLES}/runs_full", "All runs, every column", tables.INTEGER_COLUMNS)
+    write_table_files(full, builder.folder, f"{TABLES}/runs_full", "All runs, every column", tables.COLUMN_FORMATS)
     builder.add(Paragraph(f"Every column: `{TABLES}/runs_full.csv`, `.md`, `.tex`, `.html`."))
 
 
