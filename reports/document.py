@@ -144,9 +144,9 @@ def html_table(shown: pd.DataFrame) -> str:
     numeric = numeric_columns(shown)
     kinds = ["num" if str(column) in numeric else "text" for column in shown.columns]
     head = "".join(f"<th class='{kind}'>{html.escape(str(column)).replace('_', '_<wbr>')}</th>"
-                   for kind, column in zip(kinds, shown.columns))  # long column names may break after an _
+                   for kind, column in zip(kinds, shown.columns, strict=True))  # long column names may break after an _
     body = "\n".join("<tr>" + "".join(f"<td class='{kind}'>{html.escape(str(cell))}</td>"
-                                      for kind, cell in zip(kinds, row)) + "</tr>"
+                                      for kind, cell in zip(kinds, row, strict=True)) + "</tr>"
                       for row in shown.itertuples(index=False))
     return f"<table class='data'>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>"
 

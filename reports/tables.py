@@ -25,7 +25,7 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
-from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS, RUN_STATUSES, setting_label
+from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS, RUN_STATUSES
 from foucault_bench.bench.problems.scenes import Scene
 from foucault_bench.bench.verdicts import pareto
 from foucault_bench.bench.verdicts.convergence import observed_order_fit
