@@ -217,7 +217,8 @@ def test_text_from_the_data_is_never_markup(awkward_report: tuple[Path, pd.DataF
     for rendered, elements in ((page, SAFE_ELEMENTS), (markdown, SAFE_ELEMENTS - {"script", "input", "style"})):
         assert {tag for tag, _ in rendered.elements} <= elements
         attributes = {(tag, name) for tag, attrs in rendered.elements for name, _ in attrs}
-        assert {name for _, name in attributes} <= SAFE_ATTRIBUTES
+        aligned = {(tag, "style") for tag in ("th", "td")}  # markdown-it aligns table columns with a style
+        assert {name for _, name in attributes - aligned} <= SAFE_ATTRIBUTES
         assert {tag for tag, name in attributes if name == "oninput"} <= {"input"}
         links = rendered.links()
         assert any(INJECTION in unquote(link) for link in links)
