@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from foucault_bench.bench.problems.reference import CACHE_ENVIRONMENT_VARIABLE
+from report_fixture import fixture_database, fixture_report  # noqa: F401 - the report fixtures, for every module
 
 
 @pytest.fixture(scope="module")

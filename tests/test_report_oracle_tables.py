@@ -33,8 +33,6 @@ from report_fixture import (
     FAILED_WITH_COST_MESSAGE,
     INLINE_SCENE,
     fixture_adequacy,
-    fixture_database,  # noqa: F401  (pytest fixture)
-    fixture_report,  # noqa: F401  (pytest fixture)
 )
 
 INJECTION = "q' onmouseover='alert(5)' x='"
@@ -172,7 +170,7 @@ def _awkward_runs(database: Path) -> pd.DataFrame:
 
 
 @pytest.fixture(scope="module")
-def awkward_report(fixture_database: Path, tmp_path_factory) -> tuple[Path, pd.DataFrame]:  # noqa: F811
+def awkward_report(fixture_database: Path, tmp_path_factory) -> tuple[Path, pd.DataFrame]:
     runs = _awkward_runs(fixture_database)
     folder = tmp_path_factory.mktemp("awkward-report")
     build_report(ReportInputs(runs=runs, include_seed=False, interactive=False,
@@ -183,7 +181,7 @@ def awkward_report(fixture_database: Path, tmp_path_factory) -> tuple[Path, pd.D
 # --------------------------------------------------------------------------------------------------------------
 # the two renderings agree
 # --------------------------------------------------------------------------------------------------------------
-def test_report_md_tables_equal_index_html_tables_cell_by_cell(fixture_report: Path) -> None:  # noqa: F811
+def test_report_md_tables_equal_index_html_tables_cell_by_cell(fixture_report: Path) -> None:
     page, markdown = _renderings(fixture_report)
     assert len(page.tables) == len(markdown.tables) >= 8
     for (page_title, page_rows), (markdown_title, markdown_rows) in zip(page.tables, markdown.tables, strict=True):
@@ -198,7 +196,7 @@ def test_report_md_tables_equal_index_html_tables_cell_by_cell(fixture_report: P
     assert markdown.image_paragraphs == len(page.captions)
 
 
-def test_texts_with_pipes_tags_and_ampersands_survive_both_renderings(fixture_report: Path) -> None:  # noqa: F811
+def test_texts_with_pipes_tags_and_ampersands_survive_both_renderings(fixture_report: Path) -> None:
     page, markdown = _renderings(fixture_report)
     notes = [row["note"] for rows in fixture_adequacy().values() for row in rows]
     for rendered in (page, markdown):
@@ -301,7 +299,7 @@ def _check_best_of_family(page: Rendered, runs: pd.DataFrame) -> int:
     return none_usable
 
 
-def test_best_of_family_has_a_row_per_family_present(fixture_report: Path, fixture_database: Path,  # noqa: F811
+def test_best_of_family_has_a_row_per_family_present(fixture_report: Path, fixture_database: Path,
                                                      awkward_report: tuple[Path, pd.DataFrame]) -> None:
     page, _ = _renderings(fixture_report)
     assert _check_best_of_family(page, _database_rows(fixture_database)) == 0
@@ -314,7 +312,7 @@ def _least_squares_slope(log_h: np.ndarray, log_e: np.ndarray) -> float:
     return float(np.polyfit(log_h, log_e, 1)[0])
 
 
-def test_convergence_points_are_the_points_fitted(fixture_report: Path, fixture_database: Path) -> None:  # noqa: F811
+def test_convergence_points_are_the_points_fitted(fixture_report: Path, fixture_database: Path) -> None:
     """Per fixed-step integrator and scene: ``points`` distinct steps of the usable runs (ok, error finite,
     positive and ≤ 0.1, where it has not saturated) are consecutive in the sweep and their least-squares slope
     is the fitted order, printed with two decimals as in the charts' legends; no points, no order."""
@@ -343,7 +341,7 @@ def test_convergence_points_are_the_points_fitted(fixture_report: Path, fixture_
     assert checked["fitted"] > 0 and checked["none"] > 0  # explicit Euler on pantheon: every error saturated
 
 
-def test_all_runs_shows_cpu_time_and_its_spread(fixture_report: Path, fixture_database: Path) -> None:  # noqa: F811
+def test_all_runs_shows_cpu_time_and_its_spread(fixture_report: Path, fixture_database: Path) -> None:
     runs = _database_rows(fixture_database)
     shown = Rendered((fixture_report / "index.html").read_text(encoding="utf-8")).table("All runs (main columns)")
     assert len(shown) == len(runs)
@@ -359,7 +357,7 @@ def test_all_runs_shows_cpu_time_and_its_spread(fixture_report: Path, fixture_da
                 assert _number(getattr(row, column)) == pytest.approx(value, rel=5e-3), column
 
 
-def test_a_setting_quoted_in_a_summary_is_found_in_the_tables(fixture_report: Path) -> None:  # noqa: F811
+def test_a_setting_quoted_in_a_summary_is_found_in_the_tables(fixture_report: Path) -> None:
     """kh has the digits of ``bench.schema.setting_label`` in every table: each ``kh=…`` setting of the
     summaries is a kh cell of the same scene and integrator in "All runs"."""
     page = Rendered((fixture_report / "index.html").read_text(encoding="utf-8"))
@@ -378,8 +376,8 @@ def test_a_setting_quoted_in_a_summary_is_found_in_the_tables(fixture_report: Pa
     assert quoted > 0
 
 
-def test_the_scenes_table_fills_an_inline_scene_from_its_rows(fixture_report: Path,  # noqa: F811
-                                                               fixture_database: Path) -> None:  # noqa: F811
+def test_the_scenes_table_fills_an_inline_scene_from_its_rows(fixture_report: Path,
+                                                               fixture_database: Path) -> None:
     runs = _database_rows(fixture_database)
     scenes = Rendered((fixture_report / "index.html").read_text(encoding="utf-8")).table(
         "The scenes: place, pendulum, release, grid, model and why").set_index("scene")
