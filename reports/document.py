@@ -8,6 +8,12 @@ Markdown via pandas ``to_markdown``, which uses ``tabulate``) and written beside
 relative to the document's folder, so the folder opens in a browser with no server. The reference notes a document
 cites (``docs/models/README.md "Airy precession"`` and the like) are copied from the installed package into its
 ``docs/`` folder (``copy_reference_docs``), so the folder reads on its own.
+
+Texts come from the data (scene names of a database made elsewhere, plug-in family names, messages) and are
+shown as themselves in both renderings: HTML escapes every text and attribute value (file links percent-encoded
+first), Markdown backslash-escapes every character it would read (``markdown_text``: ``|`` would end a table
+cell, ``<`` start a tag, ``&`` an entity). The only markup of a paragraph, caption or column note is `code` and
+**bold** (``_inline_parts``), rendered alike in both.
 """
 
 from __future__ import annotations
