@@ -44,6 +44,7 @@ from foucault_bench.reports.document import (
     Heading,
     Paragraph,
     Table,
+    literal,
     write_document,
     write_table_files,
 )
@@ -163,11 +164,11 @@ def _overview(builder: _Builder, inputs: ReportInputs) -> None:
     counts = runs["status"].value_counts()
     builder.add(Heading("Overview"))
     if inputs.provenance:
-        builder.add(Paragraph("; ".join(f"**{k}**: {v}" for k, v in inputs.provenance.items())))
+        builder.add(Paragraph("; ".join(f"**{k}**: {literal(v)}" for k, v in inputs.provenance.items())))
     builder.add(Paragraph(
         f"{len(runs)} runs: {', '.join(f'{int(counts.get(status, 0))} {status}' for status in tables.STATUSES)}. "
-        f"Scenes: {', '.join(sorted(runs['scene'].unique()))}. "
-        f"Integrators: {', '.join(sorted(runs['integrator'].unique()))}."))
+        f"Scenes: {literal(', '.join(sorted(runs['scene'].unique())))}. "
+        f"Integrators: {literal(', '.join(sorted(runs['integrator'].unique())))}."))
     builder.add(Paragraph(
         "How to read the charts: colour = integrator family (the same in every chart), marker and line pattern = "
         "integrator within its family, solid-type lines = fixed-step sweeps (k·h), dashed-type lines = tolerance "
@@ -262,8 +263,9 @@ def cost_basis_sentences(runs: pd.DataFrame) -> str:
         for name in sorted(set(names)):
             integrator = REGISTRY.get(name)
             by_basis.setdefault(getattr(integrator, "cost_basis", None), []).append(name)
-        parts = [f"{', '.join(members)}: {COST_BASIS_MEANING.get(basis, basis)}" for basis, members in by_basis.items()]
-        sentences.append(f"Family {family}: " + "; ".join(parts) + ".")
+        parts = [f"{literal(', '.join(members))}: {literal(str(COST_BASIS_MEANING.get(basis, basis)))}"
+                 for basis, members in by_basis.items()]
+        sentences.append(f"Family {literal(family)}: " + "; ".join(parts) + ".")
     return "How each cost was measured. " + " ".join(sentences)
 
 

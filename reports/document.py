@@ -160,12 +160,19 @@ def html_table(shown: pd.DataFrame) -> str:
 # --------------------------------------------------------------------------------------------------------------
 # renderers
 # --------------------------------------------------------------------------------------------------------------
-_INLINE_MARKUP = re.compile(r"`([^`]+)`|\*\*([^*]+)\*\*")
-"""The markup of a paragraph, caption or note: `code` and **bold**; everything else is plain text."""
+_INLINE_MARKUP = re.compile(r"\\([\\`*])|`([^`]+)`|\*\*([^*]+)\*\*")
+"""The markup of a paragraph, caption or note: `code` and **bold**, and a backslash before a backslash, a
+backtick or an asterisk for that character itself (``literal``); everything else is plain text."""
 _MARKDOWN_SPECIAL = re.compile(r"[\\`*\[\]<>&|#~!]|(?<![^\W_])_|_(?![^\W_])")
 """Characters that would be Markdown (or HTML inside Markdown) if written as they are: backslash, code, emphasis,
 links and images, tags and entities, table cells, headings, strike-through; ``_`` unless it stands between two
 letters or digits (intraword, where CommonMark never reads it as emphasis)."""
+
+
+def literal(text: str) -> str:
+    """``text`` (a name or message from the data) for a paragraph, caption or note, shown as it is: its
+    backslashes, backticks and asterisks escaped from the markup."""
+    return re.sub(r"[\\`*]", lambda match: "\\" + match.group(0), text)
 
 
 def _inline_parts(text: str) -> Iterator[tuple[str, str]]:
@@ -174,7 +181,8 @@ def _inline_parts(text: str) -> Iterator[tuple[str, str]]:
     for match in _INLINE_MARKUP.finditer(text):
         if match.start() > position:
             yield "plain", text[position:match.start()]
-        yield ("code", match.group(1)) if match.group(1) is not None else ("bold", match.group(2))
+        escaped, code, bold = match.groups()
+        yield ("plain", escaped) if escaped is not None else ("code", code) if code is not None else ("bold", bold)
         position = match.end()
     if position < len(text):
         yield "plain", text[position:]

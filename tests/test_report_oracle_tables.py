@@ -37,9 +37,10 @@ from report_fixture import (
 
 INJECTION = "q' onmouseover='alert(5)' x='"
 """A scene name from a database made elsewhere that would add an attribute to an unescaped ``href='…'``."""
-PLUGIN_FAMILY = "new <family> & co|x"
+PLUGIN_FAMILY = "new <family> & co|x `tick` **star** back\\slash"
 PLUGIN_MESSAGE = "<img src=x onerror=alert(1)> | broke & <b>stopped</b> `tick` **star**"
 PLUGIN_INTEGRATOR = "plug_in_solver"
+PROVENANCE = "made | elsewhere <x> & `y` **z**"
 
 SAFE_ATTRIBUTES = {"lang", "charset", "id", "class", "href", "src", "alt", "type", "placeholder", "data-points",
                    "oninput"}
@@ -174,7 +175,7 @@ def awkward_report(fixture_database: Path, tmp_path_factory) -> tuple[Path, pd.D
     runs = _awkward_runs(fixture_database)
     folder = tmp_path_factory.mktemp("awkward-report")
     build_report(ReportInputs(runs=runs, include_seed=False, interactive=False,
-                              provenance={"database": "made | elsewhere <x> & y"}), folder)
+                              provenance={"database": PROVENANCE}), folder)
     return folder, runs
 
 
@@ -226,7 +227,7 @@ def test_text_from_the_data_is_never_markup(awkward_report: tuple[Path, pd.DataF
         cells = {cell for _, rows in rendered.tables for row in rows for cell in row}
         assert {PLUGIN_FAMILY, PLUGIN_MESSAGE, INJECTION} <= cells
         assert any(f"Family {PLUGIN_FAMILY}: {PLUGIN_INTEGRATOR}" in text for text in rendered.paragraphs)
-        assert "database: made | elsewhere <x> & y" in rendered.paragraphs
+        assert f"database: {PROVENANCE}" in rendered.paragraphs
 
 
 def test_an_interactive_chart_cannot_end_its_script_or_leave_its_attributes() -> None:
