@@ -29,14 +29,12 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import pandas as pd
 import pytest
 
-from foucault_bench.bench.run.matrix import Matrix, RunSpec, parse_matrix
-from foucault_bench.bench.run.runner import base_row
-from foucault_bench.bench.run.store import ResultsStore
-from foucault_bench.integrators import REGISTRY
+if TYPE_CHECKING:  # imported where used: tests/conftest.py imports this module for every test session
+    from foucault_bench.bench.run.matrix import Matrix, RunSpec
 
 FIXED_STEP = ("rk4", "verlet", "explicit_euler")
 ADAPTIVE = ("cvode_adams", "dopri5", "scipy_lsoda")
@@ -76,19 +74,23 @@ MATRIX_DOCUMENT = {
 }
 
 
-def fixture_matrix() -> Matrix:
+def fixture_matrix() -> "Matrix":
     """The fixture's matrix, validated by the real parser."""
+    from foucault_bench.bench.run.matrix import parse_matrix
+
     return parse_matrix(MATRIX_DOCUMENT, source="report_fixture", default_name="report_fixture")
 
 
-def _taken_step_s(spec: RunSpec) -> float:
+def _taken_step_s(spec: "RunSpec") -> float:
     """The step the fixed-step loop takes: the output interval divided into whole steps no longer than asked."""
     interval = spec.scene.output_interval_s
     return interval / math.ceil(interval / spec.step_s * (1.0 - 1e-12))
 
 
-def _outcome(spec: RunSpec) -> dict[str, object]:
+def _outcome(spec: "RunSpec") -> dict[str, object]:
     """The synthetic outcome columns of one run."""
+    from foucault_bench.integrators import REGISTRY
+
     scene, name = spec.scene, spec.integrator
     scale = SCENE_SCALE[scene.name]
     k = scene.params.pendulum_frequency_rad_s
@@ -132,7 +134,7 @@ def _outcome(spec: RunSpec) -> dict[str, object]:
     return row
 
 
-def _unhappy(spec: RunSpec, row: dict[str, object]) -> dict[str, object]:
+def _unhappy(spec: "RunSpec", row: dict[str, object]) -> dict[str, object]:
     """The diverged and failed runs (see the module docstring); ``row`` unchanged for every other run."""
     no_cost = dict.fromkeys(("cpu_time_s", "cpu_time_spread_s", "wall_time_s", "wall_time_spread_s", "repeats",
                              "compile_time_s"))
@@ -162,6 +164,8 @@ def _unhappy(spec: RunSpec, row: dict[str, object]) -> dict[str, object]:
 
 def fixture_rows(matrix_id: str) -> list[dict[str, object]]:
     """Every row of the fixture's matrix run ``matrix_id``, in matrix order."""
+    from foucault_bench.bench.run.runner import base_row
+
     return [_unhappy(spec, {**base_row(spec, matrix_id), **_outcome(spec)}) for spec in fixture_matrix().runs]
 
 
@@ -180,6 +184,8 @@ def fixture_adequacy() -> dict[str, list[dict[str, object]]]:
 
 def build_fixture_database(path: Path) -> Path:
     """Write the fixture database at ``path`` (a new file) through ``ResultsStore``; return ``path``."""
+    from foucault_bench.bench.run.store import ResultsStore
+
     path = Path(path)
     if path.exists():
         raise FileExistsError(f"{path} exists: the fixture writes a new database")
@@ -197,10 +203,11 @@ def build_fixture_database(path: Path) -> Path:
 def build_fixture_report(database: Path, folder: Path) -> Path:
     """The report of the fixture database in ``folder`` (``reports.build.build_report``; no studies, no seed
     section); returns ``folder``."""
+    from foucault_bench.bench.run.store import ResultsStore
     from foucault_bench.reports.build import ReportInputs, build_report
 
     with ResultsStore(database, create=False) as store:
-        runs: pd.DataFrame = store.frame()
+        runs = store.frame()
         adequacy = store.adequacy()
     build_report(ReportInputs(runs=runs, adequacy=adequacy, provenance={"database": database.name},
                               include_seed=False), folder)
