@@ -50,6 +50,7 @@ from foucault_bench.reports.document import (
     Heading,
     Paragraph,
     Table,
+    literal,
     write_document,
     write_table_files,
 )
@@ -152,7 +153,7 @@ class _Builder:
 
     def table(self, frame: pd.DataFrame, name: str, title: str, notes: dict[str, str] | None = None,
               collapsible: bool = False) -> None:
-        shown = write_table_files(frame, self.folder, f"{TABLES}/{name}", title, tables.INTEGER_COLUMNS)
+        shown = write_table_files(frame, self.folder, f"{TABLES}/{name}", title, tables.COLUMN_FORMATS)
         self.add(Table(title, shown, f"{TABLES}/{name}", tables.notes_for(frame, notes), collapsible))
 
 
@@ -169,11 +170,11 @@ def _overview(builder: _Builder, inputs: ReportInputs) -> None:
     counts = runs["status"].value_counts()
     builder.add(Heading("Overview"))
     if inputs.provenance:
-        builder.add(Paragraph("; ".join(f"**{k}**: {v}" for k, v in inputs.provenance.items())))
+        builder.add(Paragraph("; ".join(f"**{k}**: {literal(v)}" for k, v in inputs.provenance.items())))
     builder.add(Paragraph(
         f"{len(runs)} runs: {', '.join(f'{int(counts.get(status, 0))} {status}' for status in tables.STATUSES)}. "
-        f"Scenes: {', '.join(sorted(runs['scene'].unique()))}. "
-        f"Integrators: {', '.join(sorted(runs['integrator'].unique()))}."))
+        f"Scenes: {literal(', '.join(sorted(runs['scene'].unique())))}. "
+        f"Integrators: {literal(', '.join(sorted(runs['integrator'].unique())))}."))
     builder.add(Paragraph(
         "How to read the charts: colour = integrator family (the same in every chart), marker and line pattern = "
         "integrator within its family, solid-type lines = fixed-step sweeps (k·h), dashed-type lines = tolerance "
@@ -190,7 +191,7 @@ def _overview(builder: _Builder, inputs: ReportInputs) -> None:
         "positive; rates counter-clockwise about up positive (the textbook rate is −Ω_E sin φ)."))
     names = sorted(runs["scene"].unique())
     builder.add(Heading("Scenes", level=3))
-    builder.table(tables.scenes_table([SCENES[name] for name in names if name in SCENES], names), "scenes",
+    builder.table(tables.scenes_table([SCENES[name] for name in names if name in SCENES], runs), "scenes",
                   "The scenes: place, pendulum, release, grid, model and why")
 
 
@@ -218,7 +219,7 @@ def _decisions(builder: _Builder, runs: pd.DataFrame, targets: tuple[float, ...]
                                (families, "best_of_family", "Best run of each family per scene (reference error)")):
         builder.table(frame[frame["metric"] == "reference_error"] if not frame.empty else frame, stem, title)
         write_table_files(frame, builder.folder, f"{TABLES}/{stem}_all_metrics", f"{title[:title.index(' (')]}, "
-                          "every error metric", tables.INTEGER_COLUMNS)
+                          "every error metric", tables.COLUMN_FORMATS)
     builder.add(Paragraph(
         f"The same for every error metric (energy error and drift, precession-rate error, analytic gap): "
         f"`{TABLES}/pareto_fronts_all_metrics.csv` and `{TABLES}/best_of_family_all_metrics.csv` (also .md, .tex, "
@@ -279,8 +280,9 @@ def cost_basis_sentences(runs: pd.DataFrame) -> str:
         for name in sorted(set(names)):
             integrator = REGISTRY.get(name)
             by_basis.setdefault(getattr(integrator, "cost_basis", None), []).append(name)
-        parts = [f"{', '.join(members)}: {COST_BASIS_MEANING.get(basis, basis)}" for basis, members in by_basis.items()]
-        sentences.append(f"Family {family}: " + "; ".join(parts) + ".")
+        parts = [f"{literal(', '.join(members))}: {literal(str(COST_BASIS_MEANING.get(basis, basis)))}"
+                 for basis, members in by_basis.items()]
+        sentences.append(f"Family {literal(family)}: " + "; ".join(parts) + ".")
     return "How each cost was measured. " + " ".join(sentences)
 
 
@@ -492,7 +494,7 @@ def _all_runs(builder: _Builder, runs: pd.DataFrame) -> None:
         "second table hold every column of foucault_bench.bench.schema."))
     builder.table(tables.compact_table(runs), "runs_compact", "All runs (main columns)", collapsible=True)
     full = tables.full_table(runs)
-    write_table_files(full, builder.folder, f"{TABLES}/runs_full", "All runs, every column", tables.INTEGER_COLUMNS)
+    write_table_files(full, builder.folder, f"{TABLES}/runs_full", "All runs, every column", tables.COLUMN_FORMATS)
     builder.add(Paragraph(f"Every column: `{TABLES}/runs_full.csv`, `.md`, `.tex`, `.html`."))
 
 

@@ -8,6 +8,12 @@ Markdown via pandas ``to_markdown``, which uses ``tabulate``) and written beside
 relative to the document's folder, so the folder opens in a browser with no server. The reference notes a document
 cites (``docs/models/README.md "Airy precession"`` and the like) are copied from the installed package into its
 ``docs/`` folder (``copy_reference_docs``), so the folder reads on its own.
+
+Texts come from the data (scene names of a database made elsewhere, plug-in family names, messages) and are
+shown as themselves in both renderings: HTML escapes every text and attribute value (file links percent-encoded
+first), Markdown backslash-escapes every character it would read (``markdown_text``: ``|`` would end a table
+cell, ``<`` start a tag, ``&`` an entity). The only markup of a paragraph, caption or column note is `code` and
+**bold** (``_inline_parts``), rendered alike in both.
 """
 
 from __future__ import annotations
@@ -18,7 +24,9 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import cast
+from types import MappingProxyType
+from typing import Iterator, Mapping, cast
+from urllib.parse import quote
 
 import numpy as np
 import pandas as pd
@@ -70,35 +78,41 @@ Block = Heading | Paragraph | Figure | Table
 # --------------------------------------------------------------------------------------------------------------
 # number formatting and table files
 # --------------------------------------------------------------------------------------------------------------
-def format_value(value: object, integer: bool = False) -> str:
-    """Three significant digits for reals (whole numbers when ``integer``), '–' for missing values."""
+def format_value(value: object, spec: str | None = None) -> str:
+    """A cell as text: reals with the format ``spec`` (a Python format specification such as ``.4g``) or, without
+    one, three significant digits, written out in full from 100 up to a million (3600 s is ``3600``, not
+    ``3.6e+03``); '–' for missing values. Text keeps its characters, with line breaks as spaces (a cell is one
+    line)."""
     if isinstance(value, np.generic):
         value = value.item()
     if value is None or value is pd.NA or (isinstance(value, float) and math.isnan(value)):
         return "–"
     if isinstance(value, float):
-        return f"{value:.0f}" if integer else f"{value:.3g}"
-    return str(value)
+        if spec is not None:
+            return format(value, spec)
+        return f"{value:.0f}" if 100.0 <= abs(value) < 1e6 else f"{value:.3g}"
+    return " ".join(str(value).splitlines()) if isinstance(value, str) else str(value)
 
 
-def display_frame(frame: pd.DataFrame, integer_columns: frozenset[str] = frozenset()) -> pd.DataFrame:
-    """A copy of ``frame`` with every cell formatted as text (``format_value``)."""
+def display_frame(frame: pd.DataFrame, formats: Mapping[str, str] = MappingProxyType({})) -> pd.DataFrame:
+    """A copy of ``frame`` with every cell formatted as text (``format_value`` with the column's format from
+    ``formats``, column name → format specification)."""
     shown = frame.astype(object).copy()
     for column in shown.columns:
-        integer = column in integer_columns
-        shown[column] = [format_value(value, integer) for value in shown[column]]
+        spec = formats.get(str(column))
+        shown[column] = [format_value(value, spec) for value in shown[column]]
     return shown
 
 
 def write_table_files(frame: pd.DataFrame, folder: Path, stem: str, caption: str,
-                      integer_columns: frozenset[str] = frozenset()) -> pd.DataFrame:
-    """Write ``frame`` as ``<stem>.csv`` (full precision), ``.md``, ``.tex`` and ``.html`` (formatted) under
-    ``folder``; return the formatted frame."""
+                      formats: Mapping[str, str] = MappingProxyType({})) -> pd.DataFrame:
+    """Write ``frame`` as ``<stem>.csv`` (full precision), ``.md``, ``.tex`` and ``.html`` (formatted with
+    ``formats``, see ``display_frame``) under ``folder``; return the formatted frame."""
     target = folder / stem
     target.parent.mkdir(parents=True, exist_ok=True)
     frame.to_csv(target.with_suffix(".csv"), index=False)
-    shown = display_frame(frame, integer_columns)
-    target.with_suffix(".md").write_text(f"**{caption}**\n\n{markdown_table(shown)}\n", encoding="utf-8")
+    shown = display_frame(frame, formats)
+    target.with_suffix(".md").write_text(f"**{markdown_text(caption)}**\n\n{markdown_table(shown)}\n", encoding="utf-8")
     target.with_suffix(".tex").write_text(latex_table(shown, caption, numeric_columns(shown)), encoding="ascii")
     target.with_suffix(".html").write_text(
         f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>{html.escape(caption)}</title></head>"
@@ -107,9 +121,12 @@ def write_table_files(frame: pd.DataFrame, folder: Path, stem: str, caption: str
 
 
 def markdown_table(shown: pd.DataFrame) -> str:
+    """The formatted table as a GitHub-flavoured Markdown table, every header and cell escaped
+    (``markdown_text``), so that a ``|`` or ``<`` of the data is shown as itself."""
     if shown.empty:
         return "_(no rows)_"
-    return shown.to_markdown(index=False, disable_numparse=True)
+    escaped = shown.rename(columns=lambda column: markdown_text(str(column))).map(lambda cell: markdown_text(str(cell)))
+    return escaped.to_markdown(index=False, disable_numparse=True)
 
 
 def numeric_columns(shown: pd.DataFrame) -> frozenset[str]:
@@ -143,10 +160,70 @@ def html_table(shown: pd.DataFrame) -> str:
 # --------------------------------------------------------------------------------------------------------------
 # renderers
 # --------------------------------------------------------------------------------------------------------------
+_INLINE_MARKUP = re.compile(r"\\([\\`*])|`([^`]+)`|\*\*([^*]+)\*\*")
+"""The markup of a paragraph, caption or note: `code` and **bold**, and a backslash before a backslash, a
+backtick or an asterisk for that character itself (``literal``); everything else is plain text."""
+_MARKDOWN_SPECIAL = re.compile(r"[\\`*\[\]<>&|#~!]|(?<![^\W_])_|_(?![^\W_])")
+"""Characters that would be Markdown (or HTML inside Markdown) if written as they are: backslash, code, emphasis,
+links and images, tags and entities, table cells, headings, strike-through; ``_`` unless it stands between two
+letters or digits (intraword, where CommonMark never reads it as emphasis)."""
+
+
+def literal(text: str) -> str:
+    """``text`` (a name or message from the data) for a paragraph, caption or note, shown as it is: its
+    backslashes, backticks and asterisks escaped from the markup."""
+    return re.sub(r"[\\`*]", lambda match: "\\" + match.group(0), text)
+
+
+def _inline_parts(text: str) -> Iterator[tuple[str, str]]:
+    """``text`` split into ("plain" | "code" | "bold", content) parts (``_INLINE_MARKUP``)."""
+    position = 0
+    for match in _INLINE_MARKUP.finditer(text):
+        if match.start() > position:
+            yield "plain", text[position:match.start()]
+        escaped, code, bold = match.groups()
+        yield ("plain", escaped) if escaped is not None else ("code", code) if code is not None else ("bold", bold)
+        position = match.end()
+    if position < len(text):
+        yield "plain", text[position:]
+
+
+def markdown_text(text: str) -> str:
+    """``text`` escaped for Markdown: shown as itself by any CommonMark parser, in a paragraph or a table cell
+    (every special character backslash-escaped, line breaks as spaces); no HTML passes through."""
+    return _MARKDOWN_SPECIAL.sub(lambda match: "\\" + match.group(0), " ".join(text.splitlines()))
+
+
+def _code_span(text: str) -> str:
+    """A Markdown code span holding ``text`` literally (a fence longer than any run of backticks in it)."""
+    fence = "`" * (max((len(run) for run in re.findall("`+", text)), default=0) + 1)
+    padding = " " if text.startswith("`") or text.endswith("`") else ""
+    return f"{fence}{padding}{text}{padding}{fence}"
+
+
 def _inline_html(text: str) -> str:
-    escaped = html.escape(text)
-    escaped = re.sub(r"`([^`]+)`", r"<code>\1</code>", escaped)
-    return re.sub(r"\*\*([^*]+)\*\*", r"<strong>\1</strong>", escaped)
+    """A paragraph's text as HTML: `code` and **bold** marked up, everything else escaped."""
+    tags = {"plain": "{}", "code": "<code>{}</code>", "bold": "<strong>{}</strong>"}
+    return "".join(tags[kind].format(html.escape(part)) for kind, part in _inline_parts(text))
+
+
+def _inline_markdown(text: str) -> str:
+    """The same text as Markdown: code spans and bold kept, everything else escaped (``markdown_text``), and a
+    start that would open a list or a code block (``- ``, ``+ ``, ``1. ``, leading spaces) kept as text."""
+    rendered = {"plain": markdown_text, "code": _code_span, "bold": lambda part: f"**{markdown_text(part)}**"}
+    markdown = "".join(rendered[kind](part) for kind, part in _inline_parts(text.lstrip()))
+    return re.sub(r"^(\d*)([-+=.)])", r"\1\\\2", markdown, count=1)
+
+
+def _attribute(value: str) -> str:
+    """A value for an HTML attribute in quotes (single or double): every quote and ``<&>`` escaped."""
+    return html.escape(value, quote=True)
+
+
+def _url(path: str) -> str:
+    """A relative file path as a URL: each part percent-encoded (a name holding a quote, a space or ``#`` still
+    names its file)."""
+    return quote(path, safe="/")
 
 
 def _anchor(text: str) -> str:
@@ -159,23 +236,27 @@ def _table_links(stem: str) -> list[tuple[str, str]]:
 
 
 def render_markdown(title: str, blocks: list[Block]) -> str:
-    lines = [f"# {title}", ""]
+    """The blocks as Markdown (GitHub-flavoured: tables with pipes); every text from the data escaped
+    (``markdown_text``), so the only HTML in it is the ``<details>`` fold of a collapsible table."""
+    lines = [f"# {markdown_text(title)}", ""]
     for block in blocks:
         if isinstance(block, Heading):
-            lines += ["#" * block.level + " " + block.text, ""]
+            lines += ["#" * block.level + " " + markdown_text(block.text), ""]
         elif isinstance(block, Paragraph):
-            lines += [block.text, ""]
+            lines += [_inline_markdown(block.text), ""]
         elif isinstance(block, Figure):
-            lines += [f"![{block.caption}]({block.stem}.png)", "",
-                      f"*{block.caption}* ([SVG]({block.stem}.svg))", ""]
+            caption = _inline_markdown(block.caption)
+            lines += [f"![{caption}]({_url(block.stem + '.png')})", "",
+                      f"*{caption}* ([SVG]({_url(block.stem + '.svg')}))", ""]
         elif isinstance(block, Table):
-            links = ", ".join(f"[{kind}]({path})" for kind, path in _table_links(block.stem))
+            links = ", ".join(f"[{kind}]({_url(path)})" for kind, path in _table_links(block.stem))
             table = markdown_table(block.display)
             if block.collapsible:
                 table = f"<details><summary>show the {len(block.display)} rows</summary>\n\n{table}\n\n</details>"
-            lines += [f"**{block.title}** ({links})", "", table, ""]
+            lines += [f"**{markdown_text(block.title)}** ({links})", "", table, ""]
             if block.column_notes:
-                lines += ["Columns: " + "; ".join(f"`{name}`: {note}" for name, note in block.column_notes.items()), ""]
+                lines += ["Columns: " + "; ".join(f"{_code_span(name)}: {_inline_markdown(note)}"
+                                                  for name, note in block.column_notes.items()), ""]
     return "\n".join(lines).rstrip() + "\n"
 
 
@@ -234,19 +315,19 @@ def _anchors(blocks: list[Block]) -> dict[int, str]:
 def _interactive_html(block: Figure, number: int) -> str:
     """A plotly chart: its div (``data-points``: the markers it should draw) and the script drawing it."""
     chart_id = f"chart-{number}"
-    figure_json = cast(str, block.interactive).replace("</", "<\\/")  # called for interactive figures only
-    return (f"<figure><div class='chart' id='{chart_id}' data-points='{block.points}'></div><script>"
+    figure_json = cast(str, block.interactive).replace("<", "\\u003c")  # JSON strings only: no </script> or <!-- ends it
+    return (f"<figure><div class='chart' id='{chart_id}' data-points='{int(block.points)}'></div><script>"
             f"(function () {{ var figure = {figure_json}; "
             f"Plotly.newPlot('{chart_id}', figure.data, figure.layout, {{responsive: true, displaylogo: false}})"
             f".then(function (chart) {{ chart.on('plotly_legendclick', function (event) "
             f"{{ return foucaultLegendClick(chart, event); }}); }}); }})();</script>"
-            f"<figcaption>{_inline_html(block.caption)} (static: <a href='{block.stem}.png'>PNG</a>, "
-            f"<a href='{block.stem}.svg'>SVG</a>)</figcaption></figure>")
+            f"<figcaption>{_inline_html(block.caption)} (static: <a href='{_attribute(_url(block.stem + '.png'))}'>"
+            f"PNG</a>, <a href='{_attribute(_url(block.stem + '.svg'))}'>SVG</a>)</figcaption></figure>")
 
 
 def render_html(title: str, blocks: list[Block]) -> str:
     anchors = _anchors(blocks)
-    toc = "".join(f"<li><a href='#{anchors[i]}'>{html.escape(b.text)}</a></li>"
+    toc = "".join(f"<li><a href='#{_attribute(anchors[i])}'>{html.escape(b.text)}</a></li>"
                   for i, b in enumerate(blocks) if isinstance(b, Heading) and b.level == 2)
     head = ""
     if any(isinstance(block, Figure) and block.interactive for block in blocks):
@@ -261,18 +342,19 @@ def render_html(title: str, blocks: list[Block]) -> str:
     charts = 0
     for index, block in enumerate(blocks):
         if isinstance(block, Heading):
-            parts.append(f"<h{block.level} id='{anchors[index]}'>{html.escape(block.text)}</h{block.level}>")
+            parts.append(f"<h{block.level} id='{_attribute(anchors[index])}'>{html.escape(block.text)}"
+                         f"</h{block.level}>")
         elif isinstance(block, Paragraph):
             parts.append(f"<p>{_inline_html(block.text)}</p>")
         elif isinstance(block, Figure) and block.interactive:
             charts += 1
             parts.append(_interactive_html(block, charts))
         elif isinstance(block, Figure):
-            parts.append(f"<figure><a href='{block.stem}.svg'><img src='{block.stem}.png' "
-                         f"alt='{html.escape(block.caption)}'></a><figcaption>{_inline_html(block.caption)} "
-                         f"(<a href='{block.stem}.svg'>SVG</a>)</figcaption></figure>")
+            svg, png = _attribute(_url(block.stem + ".svg")), _attribute(_url(block.stem + ".png"))
+            parts.append(f"<figure><a href='{svg}'><img src='{png}' alt='{_attribute(block.caption)}'></a>"
+                         f"<figcaption>{_inline_html(block.caption)} (<a href='{svg}'>SVG</a>)</figcaption></figure>")
         elif isinstance(block, Table):
-            links = ", ".join(f"<a href='{path}'>{kind}</a>" for kind, path in _table_links(block.stem))
+            links = ", ".join(f"<a href='{_attribute(_url(path))}'>{kind}</a>" for kind, path in _table_links(block.stem))
             parts.append(f"<p><strong>{html.escape(block.title)}</strong> ({links})</p>")
             table = f"<div class='table-wrap'>{html_table(block.display)}</div>"
             if block.collapsible:

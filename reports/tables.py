@@ -4,15 +4,18 @@
   and setting whose reference error meets it, the runner-up and the cost ratio (``bench.verdicts.pareto``);
 * ``per_integrator``: one row per (scene, integrator): the cheapest setting whose reference error reaches
   ``target`` (1e-6 by default), its cost, or "not reached"; run counts by status;
-* ``fronts`` / ``families``: the Pareto-efficient runs of every error metric, and the best run of each family;
-* ``scenes_table``: what each scene is (place, pendulum, release, grid, model and why, source).
+* ``fronts`` / ``families``: the Pareto-efficient runs of every error metric, and the best run of each family
+  present (or why it has none);
+* ``scenes_table``: what each scene is (place, pendulum, release, grid, model and why, source; for an inline
+  scene of a matrix file, the model, duration and grid its rows hold).
 * ``convergence_orders``: the observed order of each fixed-step integrator per scene
   (``bench.verdicts.convergence.observed_order``) next to its declared order.
 * ``compact_table`` / ``full_table``: the tidy results, a readable subset and every column.
 
 Every table keeps a row for every integrator present in the results, with the counts of ok, diverged and
 failed runs, so a run that failed appears with its status instead of vanishing. ``COLUMN_NOTES`` states each
-column's unit and meaning (from ``bench.schema`` plus the derived columns defined here).
+column's unit and meaning (from ``bench.schema`` plus the derived columns defined here); ``COLUMN_FORMATS``
+how a column is printed (``reports.document.display_frame``).
 """
 
 from __future__ import annotations
@@ -25,8 +28,8 @@ import pandas as pd
 from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS, RUN_STATUSES
 from foucault_bench.bench.problems.scenes import Scene
 from foucault_bench.bench.verdicts import pareto
-from foucault_bench.bench.verdicts.convergence import observed_order
-from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS, cheapest_meeting, cost_column
+from foucault_bench.bench.verdicts.convergence import observed_order_fit
+from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS, ERROR_METRICS, cheapest_meeting, cost_column
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_OK
 from foucault_bench.integrators.registry import REGISTRY
 
@@ -41,7 +44,8 @@ DERIVED_NOTES: dict[str, str] = {
     "diverged": "runs whose state left the bounds or became non-finite",
     "failed": "runs that raised an error (message in `note`)",
     "timeout": "runs stopped at the per-run time limit",
-    "outcome": "whether any ok run reached the target reference error",
+    "outcome": "per integrator: whether an ok run reached the target; per family: its best run, or 'no usable "
+               "run' (no ok run with a finite error and a cost > 0) with its runs by status",
     "setting": "step as k·h (fixed-step) or tolerance (adaptive)",
     "note": "first diverged/failed message of this scene and integrator",
     "metric": "error column the row is about (bench.verdicts.pareto.ERROR_METRICS)",
@@ -66,8 +70,11 @@ DERIVED_NOTES: dict[str, str] = {
     "why_model": "why the scene's model is enough (bench.problems.adequacy measures the others)",
     "source": "where the scene's numbers come from",
     "kind": "fixed-step (fitted) or adaptive (no step size to fit against)",
-    "fitted_order": "slope of log(reference_error) against log(step_s) over the ok runs",
-    "points": "ok runs with a finite positive reference error used in the fit",
+    "fitted_order": "slope of log(reference_error) against log(step_s) by bench.verdicts.convergence."
+                    "observed_order: of the ok runs with a finite error ≤ 0.1 (larger ones have saturated), the "
+                    "finest steps (at most 4) of the longest stretch whose local slopes agree; empty when no "
+                    "stretch qualifies",
+    "points": "distinct steps that fit used (0: no fit, e.g. every error saturated)",
     "energy_error_first_hour": "max |E − E₀| / E_swing over t ≤ 1 h",
     "energy_error_end": "|E − E₀| / E_swing at the last finite output time",
     "end_s": "s; last output time with a finite state",
@@ -87,11 +94,27 @@ COLUMN_NOTES: dict[str, str] = {
 }
 INTEGER_COLUMNS: frozenset[str] = frozenset(
     {c.name for c in COLUMNS if c.sql_type == "INTEGER"} | {"runs", "ok", "diverged", "failed", "timeout", "rank", "points"})
+KH_FORMAT = ".4g"
+"""k·h with four significant digits, as ``bench.schema.setting_label`` writes a setting (``kh=0.2726``), so a
+setting quoted in a summary is found as it is in the tables."""
+KH_COLUMNS: frozenset[str] = frozenset({"kh", "stability_limit_kh", "declared_limit_kh", "measured_limit_kh",
+                                        "first_diverged_kh", "kh_below_limit", "largest_kh_not_diverged"})
+ORDER_FORMAT = ".2f"
+"""A fitted order with two decimals, as the convergence charts' legends write it (``fitted order 6.00``)."""
+COLUMN_FORMATS: dict[str, str] = {
+    **{column: ".0f" for column in INTEGER_COLUMNS}, **{column: KH_FORMAT for column in KH_COLUMNS},
+    "fitted_order": ORDER_FORMAT,
+}
+"""Column → format specification of its printed cells (``reports.document.display_frame``; other reals: three
+significant digits)."""
 
 COMPACT_COLUMNS: tuple[str, ...] = (
     "scene", "model", "integrator", "family", "kh", "tol", "status", "reference_error", "energy_max_rel_error",
-    "precession_rate_ref_error", "precession_rate_error", "analytic_gap_exact", "wall_time_s", "nfev", "message",
+    "precession_rate_ref_error", "precession_rate_error", "analytic_gap_exact", "cpu_time_s", "cpu_time_spread_s",
+    "wall_time_s", "steps", "nfev", "message",
 )
+"""The "All runs" table: identity, outcome, verdicts, and the costs: CPU time (what every decision uses) with its
+spread over the repeats, wall time, accepted steps (the charts' second cost axis) and evaluations."""
 
 
 ADEQUACY_NOTES: dict[str, str] = {
@@ -158,28 +181,50 @@ def fronts(frame: pd.DataFrame) -> pd.DataFrame:
 
 
 def families(frame: pd.DataFrame) -> pd.DataFrame:
-    """Per scene, metric and family: the family's most accurate run and its share of the front."""
-    parts = [pareto.best_of_family(frame, metric) for metric in pareto.metrics_present(frame)]
-    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
+    """Per scene, metric and family present in the scene: the family's most accurate run and its share of the
+    front (``pareto.best_of_family``), or a row saying it has no usable run, with its run counts by status.
+    Metrics: the reference error always, the others where some run has a value; a metric gets rows only in
+    scenes whose model it measures the integrator on (``pareto.ERROR_METRICS``)."""
+    metrics = ["reference_error"] + [metric for metric in pareto.metrics_present(frame) if metric != "reference_error"]
+    cost = cost_column(frame)
+    parts = []
+    for metric in metrics:
+        best = pareto.best_of_family(frame, metric)
+        rows = []
+        for (scene, family), group in frame.groupby(["scene", "family"], sort=True):
+            found = best[(best["scene"] == scene) & (best["family"] == family)]
+            if not found.empty:
+                rows.append({**found.iloc[0].to_dict(), "outcome": "best run"})
+            elif group["model"].map(ERROR_METRICS[metric].applies).astype(bool).any():
+                counts = group["status"].value_counts()
+                statuses = ", ".join(f"{counts[status]} {status}" for status in STATUSES if status in counts)
+                rows.append({"scene": scene, "metric": metric, "family": family, "integrator": "",
+                             "setting": "", "error": np.nan, cost: np.nan, "front_points": 0,
+                             "outcome": f"no usable run ({statuses})"})
+        parts.append(pd.DataFrame(rows, columns=["scene", "metric", "family", "outcome", "integrator", "setting",
+                                                 "error", cost, "front_points"]))
+    return pd.concat(parts, ignore_index=True)
 
 
 def convergence_orders(frame: pd.DataFrame) -> pd.DataFrame:
     """Per (scene, integrator): declared order and the order fitted on the ok fixed-step runs' reference error
-    against step size (``bench.verdicts.convergence.observed_order``; needs two or more distinct steps)."""
+    against step size (``bench.verdicts.convergence.observed_order``; needs two or more distinct steps), with
+    the number of points that fit used."""
     rows = []
     for (scene, integrator), group in _groups(frame):
         registered = REGISTRY.get(integrator)
         fixed = group[group["tol"].isna() & (group["status"] == STATUS_OK)]
         usable = fixed[(fixed["reference_error"] > 0) & np.isfinite(fixed["reference_error"]) & (fixed["step_s"] > 0)]
         adaptive = bool(group["tol"].notna().all())
-        fitted = np.nan
-        if not adaptive and usable["step_s"].nunique() >= 2:
-            fitted = observed_order(usable["step_s"].to_numpy(float), usable["reference_error"].to_numpy(float))
+        fitted, points = np.nan, 0
+        if not adaptive:
+            fitted, points = observed_order_fit(usable["step_s"].to_numpy(float),
+                                                usable["reference_error"].to_numpy(float))
         rows.append({
             "scene": scene, "integrator": integrator, "family": group["family"].iloc[0],
             "declared_order": None if registered is None else registered.order,
             "kind": "adaptive" if adaptive else "fixed-step", "fitted_order": fitted,
-            "points": len(usable), **_status_counts(group),
+            "points": points, **_status_counts(group),
         })
     return pd.DataFrame(rows)
 
@@ -190,9 +235,10 @@ def orders_by_integrator(orders: pd.DataFrame, scene: str) -> dict[str, float]:
     return {row.integrator: float(row.fitted_order) for row in rows.itertuples() if row.kind == "fixed-step"}
 
 
-def scenes_table(scenes: Sequence[Scene], names: Sequence[str] = ()) -> pd.DataFrame:
-    """One row per scene: place, pendulum, release, duration and output grid, model and why, source. Names in
-    ``names`` without a ``Scene`` (an inline scene of a matrix file the report cannot see) get a row saying so."""
+def scenes_table(scenes: Sequence[Scene], runs: pd.DataFrame | None = None) -> pd.DataFrame:
+    """One row per scene: place, pendulum, release, duration and output grid, model and why, source. A scene of
+    ``runs`` without a ``Scene`` (an inline scene of a matrix file the report cannot see) gets a row saying so,
+    with the model, duration and output interval (duration / (n_out − 1)) its rows hold."""
     rows = []
     for scene in scenes:
         params = scene.params
@@ -206,11 +252,24 @@ def scenes_table(scenes: Sequence[Scene], names: Sequence[str] = ()) -> pd.DataF
             "why_model": scene.why_model, "source": scene.source,
         })
     known = {scene.name for scene in scenes}
-    rows += [{"scene": name, "place": "inline scene of a matrix file (its parameters are in that file)"}
-             for name in names if name not in known]
+    inline = runs[~runs["scene"].isin(known)] if runs is not None else pd.DataFrame(columns=list(COLUMN_NAMES))
+    for name, scene_runs in inline.groupby("scene", sort=True):
+        rows.append({
+            "scene": name, "place": "inline scene of a matrix file (place and pendulum in that file)",
+            "duration_s": _agreed(scene_runs["duration_s"]), "model": _agreed(scene_runs["model"]),
+            "output_interval_s": _agreed(scene_runs["duration_s"] / (scene_runs["n_out"] - 1)),
+        })
     return pd.DataFrame(rows, columns=["scene", "place", "length_m", "latitude_deg", "amplitude_m",
                                        "release_azimuth_deg", "release", "duration_s", "output_interval_s",
                                        "model", "why_model", "source"])
+
+
+def _agreed(values: pd.Series) -> object:
+    """The one value ``values`` hold (NaN when none); several distinct values listed as text, never one picked."""
+    distinct = sorted(values.dropna().unique(), key=str)
+    if len(distinct) <= 1:
+        return distinct[0] if distinct else np.nan
+    return ", ".join(f"{value:g}" if isinstance(value, float) else str(value) for value in distinct)
 
 
 def _sorted_rows(frame: pd.DataFrame) -> pd.DataFrame:

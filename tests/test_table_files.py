@@ -46,7 +46,7 @@ def _report_tables() -> dict[str, pd.DataFrame]:
 def table_folder(tmp_path_factory) -> Path:
     folder = tmp_path_factory.mktemp("tables")
     for name, frame in _report_tables().items():
-        write_table_files(frame, folder, name, f"{name}: reference error ≤ 1e-3 – θ₀ and Ω_E", tables.INTEGER_COLUMNS)
+        write_table_files(frame, folder, name, f"{name}: reference error ≤ 1e-3 – θ₀ and Ω_E", tables.COLUMN_FORMATS)
     return folder
 
 

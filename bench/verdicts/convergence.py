@@ -38,16 +38,25 @@ def observed_order(step_sizes: Sequence[float], errors: Sequence[float], *, max_
        out most.
 
     Returns NaN when fewer than 2 points remain or no window qualifies. With exactly 2 usable points the
-    slope between them is returned if it is at least ``min_slope``.
+    slope between them is returned if it is at least ``min_slope``. ``observed_order_fit`` also says how many
+    points the slope was fitted on.
     """
+    return observed_order_fit(step_sizes, errors, max_error=max_error, agreement=agreement, min_slope=min_slope,
+                              finest=finest)[0]
+
+
+def observed_order_fit(step_sizes: Sequence[float], errors: Sequence[float], *, max_error: float = 0.1,
+                       agreement: float = 0.1, min_slope: float = 0.5, finest: int = 4) -> tuple[float, int]:
+    """``observed_order`` and the number of points its slope was fitted on (distinct step sizes, repeats
+    averaged; 0 with the NaN order, e.g. when every error saturated above ``max_error``)."""
     log_h, log_e = _log_points(step_sizes, errors, max_error)
     if log_h.size < 2:
-        return NAN
+        return NAN, 0
     start, stop = fitted_window(log_h, log_e, agreement=agreement, min_slope=min_slope)
     if stop - start < 2:
-        return NAN
+        return NAN, 0
     start = max(start, stop - finest)
-    return least_squares_slope(log_h[start:stop], log_e[start:stop])
+    return least_squares_slope(log_h[start:stop], log_e[start:stop]), stop - start
 
 
 def _log_points(step_sizes: Sequence[float], errors: Sequence[float], max_error: float
