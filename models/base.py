@@ -53,6 +53,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
+from foucault_bench.models.jacobian import numba_jacobian_into
 from foucault_bench.models.jit import jit, jitable
 from foucault_bench.models.parameters import (P_LENGTH, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z, PARAMETER_COUNT,
                                               PendulumParameters)
@@ -341,9 +342,7 @@ class Model:
     def numba_jacobian_into(self) -> Callable:
         """njit ``(t, y, out, p) -> None``: the same derivatives as ``jacobian_into``, compiled by numba for
         callers in compiled code (CVODE's Jacobian callback); equal to it to round-off (``models.jacobian``)."""
-        from foucault_bench.models.jacobian import numba_jacobian_into
-
-        return numba_jacobian_into(self)
+        return numba_jacobian_into(self.heyoka_system(), self.name)
 
     @functools.cached_property
     def jacobian(self) -> Callable:
