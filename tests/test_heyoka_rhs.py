@@ -92,7 +92,7 @@ def test_the_sample_varies_every_field_and_every_parameter_slot() -> None:
         assert len(values) >= 2, (f"{spec.name} is never varied: declare an example value for it in the "
                                   "example_parameters of the model that reads it")
     _, pars = random_sample(seed=1)
-    for slot_name, column in zip(PARAMETER_VECTOR_NAMES, pars.T):
+    for slot_name, column in zip(PARAMETER_VECTOR_NAMES, pars.T, strict=True):
         if slot_name != "omega_y":
             assert np.unique(column).size >= 2, slot_name
 
@@ -105,7 +105,7 @@ def heyoka_rhs(model: Model):
 @pytest.mark.parametrize("model", MODELS.values(), ids=MODELS.keys())
 def test_numba_and_heyoka_right_hand_sides_agree(model: Model) -> None:
     states, pars = random_sample(seed=1)
-    numba_values = np.array([model.numba_rhs(0.0, state, p) for state, p in zip(states, pars)])
+    numba_values = np.array([model.numba_rhs(0.0, state, p) for state, p in zip(states, pars, strict=True)])
     heyoka_values = heyoka_rhs(model)(states.T.copy(), pars=model.heyoka_parameters(pars).T.copy()).T
     scale = np.max(np.abs(numba_values), axis=0)
     assert np.all(scale > 0.0)
@@ -123,14 +123,14 @@ def test_symbolic_jacobian_matches_central_differences_of_the_numba_rhs(model: M
     weights = {-2: 1.0 / 12.0, -1: -8.0 / 12.0, 1: 8.0 / 12.0, 2: -1.0 / 12.0}
     worst = 0.0
     analytic = np.empty((4, 4))
-    for state, p in zip(states[:200], pars[:200]):
+    for state, p in zip(states[:200], pars[:200], strict=True):
         length, k = p[P_LENGTH], np.sqrt(p[P_K2])
         step = 1.0e-3 * np.array([length, length, k * length, k * length])
         model.jacobian_into(0.0, state, analytic, p)
         numeric = np.empty((4, 4))
         for j in range(4):
             shifted = [model.numba_rhs(0.0, state + m * step[j] * np.eye(4)[j], p) for m in weights]
-            numeric[:, j] = sum(w * f for w, f in zip(weights.values(), shifted)) / step[j]
+            numeric[:, j] = sum(w * f for w, f in zip(weights.values(), shifted, strict=True)) / step[j]
         column_scale = np.maximum(np.max(np.abs(numeric), axis=0), 1e-300)
         worst = max(worst, float(np.max(np.abs(analytic - numeric) / column_scale)))
     assert worst <= 1.0e-9
@@ -145,7 +145,7 @@ def test_numba_jacobian_is_the_symbolic_jacobian(model: Model) -> None:
     states, pars = random_sample(seed=3)
     symbolic = np.empty((4, 4))
     worst = 0.0
-    for state, p in zip(states, pars):
+    for state, p in zip(states, pars, strict=True):
         model.jacobian_into(0.0, state, symbolic, p)
         for layout in ("C", "F"):
             compiled = np.full((4, 4), np.nan, order=layout)
