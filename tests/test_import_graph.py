@@ -2,7 +2,7 @@
 functions and under ``if TYPE_CHECKING`` alike): no cycle among modules, and no module importing a layer above
 its own.
 
-Layers, lowest first (CONTRIBUTING-style rule "data flows models → integrators → bench → reports"): ``models`` <
+Layers, lowest first (data flows models → integrators → bench → reports): ``models`` <
 ``integrators`` < ``bench`` < ``reports``, and on top the command line, ``bench.commands`` and ``bench.cli``,
 which may import everything. The repository's top-level folders are installed as ``foucault_bench.{bench,
 models,integrators,reports}`` (pyproject.toml ``package-dir``); a file maps to the module of that name.
