@@ -15,6 +15,11 @@ How to add an integrator (integrators/README.md "Adding an integrator" has a wor
 4. Decorate the class with ``@register`` (``integrators.registry``).
 5. Run ``foucault-bench selftest NAME`` (``--plugin MODULE`` for a plug-in): it checks the declared order on
    every model, the declared stability limit, the counters, and that failures and divergences become rows.
+6. A built-in only: add it to both built-in matrices, ``bench/matrices/default.toml`` and
+   ``bench/matrices/quick.toml`` (``tests/test_matrix.py`` fails until every built-in family is swept by
+   them), and give it bounds (``[[bound]]`` entries with their basis) in ``bench/thresholds/default.toml``:
+   ``foucault-bench check`` judges the quick matrix that CI runs against those bounds, and an integrator
+   without one is judged by nothing.
 
 The framework then
 

@@ -22,7 +22,7 @@ class ExplicitEuler(FixedStepIntegrator):
     order: ClassVar[int] = 1
     stages: ClassVar[int] = 1
     stability_limit_kh: ClassVar[None] = None
-    reference: ClassVar[str] = "Euler (1768); Hairer, Nørsett & Wanner, Solving ODEs I, §I.7"
+    reference: ClassVar[str] = "Euler (1768); Hairer, Nørsett & Wanner, Solving ODEs I, §II.1"
 
     def make_step(self, model: Model) -> Callable:
         acceleration = model.numba_acceleration

@@ -20,8 +20,8 @@ Stable for kh < 2 (the Verlet limit on ½|p|² + ½(k² + a²)|r|²). The naive 
 Coriolis kick is not used: it is neither symplectic nor volume-preserving and opens the swing into an
 ellipse (integrators/README.md "Rotating-frame Verlet").
 
-Uses from the model: ``numba_kick`` (the position-only force), ``coriolis_vector`` (ω_c: the vertical part
-in the planar models, the full ω on the sphere) and the geometry (sphere → RATTLE). For a model that is not
+Uses from the model: ``numba_kick`` (the position-only force) and the geometry (sphere → RATTLE: the rotation
+ω_c is the full ω, read from p[P_OMEGA_X..Z]; plane: ω_c is its vertical part p[P_OMEGA_Z]). For a model that is not
 Hamiltonian (the seed's eqs. 4-5) the remaining velocity-dependent force G(r, ṙ) (``numba_remainder``) is
 added to both half kicks, explicitly in the first and implicitly (two fixed-point sweeps) in the second: the
 kick–drift–kick part is then the composition of a first-order map with its adjoint, symmetric and of order 2,

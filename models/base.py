@@ -12,7 +12,7 @@ radius L, z = −√(L² − x² − y²) below the pivot). From that one source
 * the right-hand side of the first-order system in the state (x, y, ẋ, ẏ) (``acceleration``), with the
   string's constraint force for the sphere (models/README.md "Spherical model", d'Alembert's principle);
 * the split a rotating-frame Verlet needs (integrators/README.md "Rotating-frame Verlet"): the
-  Coriolis rotation vector, the position-only kick −∇U(r) = F(r, 0) + ω×(ω×r) acting on the canonical
+  position-only kick −∇U(r) = F(r, 0) + ω×(ω×r) acting on the canonical
   momentum p = ṙ + ω×r, and, for non-Hamiltonian models only, the remaining velocity-dependent force
   G(r, ṙ) = F(r, ṙ) − F(r, 0) + 2ω×ṙ;
 * numba-compiled versions (``models.jit.jit``, cached on disk; math namespace = the ``math`` module) for
@@ -44,16 +44,19 @@ read by ``bench.problems.adequacy``). heyoka is handed its parameter values by `
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import types
-from dataclasses import dataclass
-from typing import Callable
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
+from foucault_bench.models.jacobian import numba_jacobian_into
 from foucault_bench.models.jit import jit, jitable
-from foucault_bench.models.parameters import P_LENGTH, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z, PARAMETER_COUNT
+from foucault_bench.models.parameters import (P_LENGTH, P_OMEGA_X, P_OMEGA_Y, P_OMEGA_Z, PARAMETER_COUNT,
+                                              PendulumParameters)
 
 STATE_NAMES = ("x", "y", "vx", "vy")
 """Every model's state: horizontal position (m) and velocity (m/s) in the rotating (South, East, Up) frame."""
@@ -118,9 +121,18 @@ class Model:
         energy: source of the conserved quantity (J/kg), or of the monitored energy where none is conserved.
         energy_name: formula of ``energy`` for tables.
         conserves_energy: whether ``energy`` is an exact invariant of the model.
-        hamiltonian: whether every velocity-dependent force is the Coriolis force of ``coriolis_vector``.
+        hamiltonian: whether every velocity-dependent force is the Coriolis force −2ω_c×ṙ (ω_c: the full
+            rotation vector on the sphere, its vertical part (0, 0, Ω_E sin φ) in the plane; ``numba_kick``).
         refines: names of the simpler models this one adds physics to (its direct parents in the adequacy
             hierarchy, e.g. the spherical pendulum refines the seed's planar model); ``()`` for a root.
+        example_parameters: field values of ``PendulumParameters`` other than their defaults that exercise
+            what this model reads beyond the models it refines (e.g. a new parameter at a value where it acts);
+            ``foucault-bench selftest`` and the tests apply them on top of their own parameters
+            (``with_example_parameters``), so that a refinement is never checked only where it equals its parents.
+        adds_parameters: the fields that switch on all the physics this model adds to the models it refines:
+            at their defaults it equals them (``equals_parents_at``), and the adequacy study then compares it with
+            none of them (``bench.problems.adequacy``). ``()`` (the default): the model differs from its parents
+            at every parameter value. Each must appear in ``example_parameters``.
     """
 
     name: str
@@ -132,10 +144,35 @@ class Model:
     conserves_energy: bool
     hamiltonian: bool
     refines: tuple[str, ...] = ()
+    example_parameters: Mapping[str, Any] = field(default_factory=dict)
+    adds_parameters: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.geometry not in ("plane", "sphere"):
             raise ValueError(f"geometry must be 'plane' or 'sphere', got {self.geometry!r}")
+        defaults = {spec.name: spec.default for spec in dataclasses.fields(PendulumParameters)}
+        for name, value in self.example_parameters.items():
+            if name not in defaults:
+                raise ValueError(f"model {self.name!r}: example parameter {name!r} is no field of PendulumParameters")
+            if value == defaults[name]:
+                raise ValueError(f"model {self.name!r}: example parameter {name} = {value!r} is its default; "
+                                 "an example exercises a field away from its default")
+        missing = [name for name in self.adds_parameters if name not in self.example_parameters]
+        if missing:
+            raise ValueError(f"model {self.name!r}: adds_parameters {', '.join(missing)} have no example value "
+                             "in example_parameters")
+
+    # --- declared parameters --------------------------------------------------------------------------------
+    def with_example_parameters(self, params: PendulumParameters) -> PendulumParameters:
+        """``params`` with this model's ``example_parameters`` applied on top."""
+        return dataclasses.replace(params, **self.example_parameters)
+
+    def equals_parents_at(self, params: PendulumParameters) -> bool:
+        """Whether this model is, at ``params``, the models it refines: it declares ``adds_parameters`` and every
+        one of them is at its default value in ``params``."""
+        defaults = {spec.name: spec.default for spec in dataclasses.fields(PendulumParameters)}
+        return bool(self.adds_parameters) and all(getattr(params, name) == defaults[name]
+                                                  for name in self.adds_parameters)
 
     # --- structure --------------------------------------------------------------------------------------
     @property
@@ -144,13 +181,6 @@ class Model:
 
     def _geometry(self) -> tuple[Callable, Callable]:
         return (sphere_height, sphere_project) if self.constrained_to_sphere else (plane_lift, plane_project)
-
-    def coriolis_vector(self, p: np.ndarray) -> tuple[float, float, float]:
-        """The rotation vector (rad/s) whose Coriolis force −2ω×ṙ the model contains: full ω on the sphere,
-        its vertical part (0, 0, Ω_E sin φ) in the planar models."""
-        if self.constrained_to_sphere:
-            return float(p[P_OMEGA_X]), float(p[P_OMEGA_Y]), float(p[P_OMEGA_Z])
-        return 0.0, 0.0, float(p[P_OMEGA_Z])
 
     # --- plain Python evaluation (any namespace) ------------------------------------------------------------
     def acceleration(self, m, x, y, vx, vy, p):
@@ -187,7 +217,8 @@ class Model:
     @functools.cached_property
     def numba_kick(self) -> Callable:
         """njit ``(x, y, z, p) -> (fx, fy, fz)``: −∇U(r) = F(r, 0) + ω_c×(ω_c×r), the position-only force on
-        the canonical momentum p = ṙ + ω_c×r (ω_c = ``coriolis_vector``; planar models: z = 0)."""
+        the canonical momentum p = ṙ + ω_c×r (ω_c the full rotation vector on the sphere,
+        its vertical part (0, 0, Ω_E sin φ) in the planar models, where z = 0)."""
         force = self.numba_free_force
         full_rotation = self.constrained_to_sphere
 
@@ -265,14 +296,6 @@ class Model:
         ax, ay = self.acceleration(heyoka_math(), x, y, vx, vy, pars)
         return [(x, vx), (y, vy), (vx, ax), (vy, ay)]
 
-    def heyoka_energy(self):
-        """The energy source as one heyoka expression in the state variables and ``heyoka.par``."""
-        import heyoka
-
-        x, y, vx, vy = heyoka.make_vars(*STATE_NAMES)
-        pars = [heyoka.par[i] for i in range(PARAMETER_COUNT)]
-        return self.energy(heyoka_math(), x, y, vx, vy, pars)
-
     @functools.cached_property
     def heyoka_parameter_count(self) -> int:
         """How many leading entries of the parameter vector ``heyoka_system`` reads: heyoka integrators and
@@ -319,9 +342,7 @@ class Model:
     def numba_jacobian_into(self) -> Callable:
         """njit ``(t, y, out, p) -> None``: the same derivatives as ``jacobian_into``, compiled by numba for
         callers in compiled code (CVODE's Jacobian callback); equal to it to round-off (``models.jacobian``)."""
-        from foucault_bench.models.jacobian import numba_jacobian_into
-
-        return numba_jacobian_into(self)
+        return numba_jacobian_into(self.heyoka_system(), self.name)
 
     @functools.cached_property
     def jacobian(self) -> Callable:

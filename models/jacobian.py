@@ -13,26 +13,24 @@ to round-off, not bitwise.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Callable
+from typing import Callable, Sequence
 
 from foucault_bench.models.jit import jit
-
-if TYPE_CHECKING:
-    from foucault_bench.models.base import Model
 
 STATE_ARRAY = "state"
 PARAMETER_ARRAY = "p"
 OUTPUT_ARRAY = "out"
 
 
-def jacobian_source(model: "Model", function_name: str = "jacobian_into") -> str:
+def jacobian_source(system: Sequence, function_name: str = "jacobian_into") -> str:
     """Python source of ``function_name(t, state, out, p)`` writing ∂(dy/dt)_i/∂y_j into ``out[i, j]`` (all 16
-    entries, zeros included) for ``model``; ``p`` is the full parameter vector."""
+    entries, zeros included) for the first-order ``system``, heyoka (variable, expression) pairs as
+    ``Model.heyoka_system`` returns them; ``p`` is the full parameter vector. Takes the system, not the model:
+    this module sits below ``models.base``, which imports it."""
     import heyoka
     import sympy
     from sympy.printing.pycode import PythonCodePrinter
 
-    system = model.heyoka_system()
     variables = [variable for variable, _ in system]
     derivatives = [heyoka.to_sympy(heyoka.diff(rhs, variable)) for _, rhs in system for variable in variables]
     state_index = {str(variable): index for index, variable in enumerate(variables)}
@@ -43,7 +41,7 @@ def jacobian_source(model: "Model", function_name: str = "jacobian_into") -> str
         elif symbol.name.startswith("par[") and symbol.name.endswith("]"):
             renamed[symbol] = sympy.Symbol(f"p_{int(symbol.name[4:-1])}")
         else:
-            raise ValueError(f"{model.name}: unexpected symbol {symbol.name!r} in the Jacobian")
+            raise ValueError(f"{function_name}: unexpected symbol {symbol.name!r} in the Jacobian")
     derivatives = [sympy.sympify(expression).xreplace(renamed) for expression in derivatives]
     shared, reduced = sympy.cse(derivatives, symbols=sympy.numbered_symbols("c_"))
 
@@ -63,12 +61,14 @@ def jacobian_source(model: "Model", function_name: str = "jacobian_into") -> str
     return "\n".join(lines) + "\n"
 
 
-def numba_jacobian_into(model: "Model") -> Callable:
-    """njit ``(t, state, out, p) -> None`` writing the Jacobian of ``model``'s first-order system into the
-    (4, 4) array ``out`` (row i = component of dy/dt, column j = state variable; any memory layout)."""
+def numba_jacobian_into(system: Sequence, model_name: str) -> Callable:
+    """njit ``(t, state, out, p) -> None`` writing the Jacobian of the first-order ``system`` of the model
+    ``model_name`` into the (4, 4) array ``out`` (row i = component of dy/dt, column j = state variable; any
+    memory layout)."""
     import math
 
-    source = jacobian_source(model, f"jacobian_into_{model.name}")
+    function_name = f"jacobian_into_{model_name}"
+    source = jacobian_source(system, function_name)
     namespace: dict = {"math": math, "__name__": __name__}
     exec(compile(source, __file__, "exec"), namespace)  # this file's name: numba's disk cache needs a real file
-    return jit(namespace[f"jacobian_into_{model.name}"])
+    return jit(namespace[function_name])

@@ -15,8 +15,11 @@ All quantities are SI (m, s, rad/s) except the two angles, which are in degrees.
   (``rule(check, requirement)``): ``__post_init__`` checks the type of every field and then each rule, in field
   order, and names the field in the error;
 * the parameter vector that compiled code reads is defined once, by ``PARAMETER_SLOTS`` (name, unit, how the
-  value follows from the fields). Every index (``P_GRAVITY`` ...), the length ``PARAMETER_COUNT`` and
-  ``PARAMETER_VECTOR_NAMES`` are derived from it; nothing else in the suite writes a length or an index.
+  value follows from the fields, and the name of its index constant). A field whose rule gives a ``unit``
+  (``rule(..., unit="1")``) is appended to the vector as itself, after the derived slots, so a new physical
+  parameter is one field line. Every index constant (``P_GRAVITY`` ..., ``P_<NAME>`` for a field appended as
+  itself), the length ``PARAMETER_COUNT`` and ``PARAMETER_VECTOR_NAMES`` are derived from the table; nothing
+  else in the suite writes a length or an index.
 """
 
 from __future__ import annotations
@@ -35,11 +38,12 @@ STANDARD_GRAVITY_M_S2 = 9.81
 
 
 def rule(check: Callable[[Any, "PendulumParameters"], bool] | None = None, requirement: str = "",
-         kind: str = "real") -> dict:
+         kind: str = "real", unit: str | None = None) -> dict:
     """Field metadata: ``check(value, params)`` must hold, else ValueError "FIELD REQUIREMENT, got VALUE"
     (``requirement`` may name other fields as ``{p.length_m}``); ``None``: no rule beyond the kind. ``kind``:
-    "real" (a finite real number), "pair" (two of them) or "bool"."""
-    return {"check": check, "requirement": requirement, "kind": kind}
+    "real" (a finite real number), "pair" (two of them) or "bool". ``unit``: the field enters the parameter
+    vector as itself, in that unit, with the index constant ``P_<FIELD NAME IN CAPITALS>``."""
+    return {"check": check, "requirement": requirement, "kind": kind, "unit": unit}
 
 
 def airy_fraction(swing_angle_rad: float) -> float:
@@ -144,7 +148,7 @@ class PendulumParameters:
 
     def parameter_vector(self) -> np.ndarray:
         """The float64 vector every compiled right-hand side reads, in the layout of ``PARAMETER_SLOTS``."""
-        return np.array([slot.value(self) for slot in PARAMETER_SLOTS], dtype=np.float64)
+        return np.array([slot.value(self) for slot in _layout(type(self))], dtype=np.float64)
 
     def initial_state(self) -> np.ndarray:
         """(x, y, ẋ, ẏ) at t = 0 in m and m/s: released at ``amplitude_m`` along ``release_azimuth_deg``."""
@@ -155,35 +159,73 @@ class PendulumParameters:
 
 @dataclass(frozen=True)
 class ParameterSlot:
-    """One entry of the parameter vector: its name, unit, and value for given parameters."""
+    """One entry of the parameter vector: its name, unit, value for given parameters, and the name of the
+    module-level index constant (``P_<NAME>`` unless given)."""
 
     name: str
     unit: str
     value: Callable[[PendulumParameters], float]
+    constant: str = ""
+
+    @property
+    def index_constant(self) -> str:
+        return self.constant or f"P_{self.name.upper()}"
 
 
-PARAMETER_SLOTS: tuple[ParameterSlot, ...] = (
-    ParameterSlot("g", "m/s²", lambda p: p.gravity_m_s2),
-    ParameterSlot("L", "m", lambda p: p.length_m),
-    ParameterSlot("k2", "1/s²", lambda p: p.gravity_m_s2 / p.length_m),
-    ParameterSlot("omega_x", "rad/s", lambda p: p.omega_vector_rad_s[0]),
-    ParameterSlot("omega_y", "rad/s", lambda p: p.omega_vector_rad_s[1]),
-    ParameterSlot("omega_z", "rad/s", lambda p: p.omega_vector_rad_s[2]),
-    ParameterSlot("centrifugal", "1 or 0", lambda p: float(p.centrifugal)),
+def _field_slot(name: str, unit: str) -> ParameterSlot:
+    return ParameterSlot(name, unit, lambda p: float(getattr(p, name)))
+
+
+DERIVED_SLOTS: tuple[ParameterSlot, ...] = (
+    ParameterSlot("g", "m/s²", lambda p: p.gravity_m_s2, "P_GRAVITY"),
+    ParameterSlot("L", "m", lambda p: p.length_m, "P_LENGTH"),
+    ParameterSlot("k2", "1/s²", lambda p: p.gravity_m_s2 / p.length_m, "P_K2"),
+    ParameterSlot("omega_x", "rad/s", lambda p: p.omega_vector_rad_s[0], "P_OMEGA_X"),
+    ParameterSlot("omega_y", "rad/s", lambda p: p.omega_vector_rad_s[1], "P_OMEGA_Y"),
+    ParameterSlot("omega_z", "rad/s", lambda p: p.omega_vector_rad_s[2], "P_OMEGA_Z"),
+    ParameterSlot("centrifugal", "1 or 0", lambda p: float(p.centrifugal), "P_CENTRIFUGAL"),
 )
+"""The slots computed from several fields or converted (the first entries of the vector, in this order)."""
+
+def parameter_slots(parameters_class: type = PendulumParameters) -> tuple[ParameterSlot, ...]:
+    """The layout of the parameter vector for ``parameters_class``: ``DERIVED_SLOTS``, then every field
+    declared with a ``unit``, in field order."""
+    return DERIVED_SLOTS + tuple(_field_slot(spec.name, spec.metadata["unit"]) for spec in fields(parameters_class)
+                                 if spec.metadata.get("unit") is not None)
+
+
+def index_constants(slots: tuple[ParameterSlot, ...]) -> dict[str, int]:
+    """``{index constant name: index}`` of a layout; ``ValueError`` if two slots share a name or a constant."""
+    constants = {slot.index_constant: index for index, slot in enumerate(slots)}
+    if len(constants) != len(slots) or len({slot.name for slot in slots}) != len(slots):
+        raise ValueError(f"two parameter slots share a name or an index constant: {[slot.name for slot in slots]}")
+    return constants
+
+
+PARAMETER_SLOTS: tuple[ParameterSlot, ...] = parameter_slots()
 """The layout of the parameter vector handed to every compiled right-hand side (one layout for all models).
-Append a slot to give models a new quantity; the indices below follow."""
+Add a field with ``rule(..., unit=...)`` (or a slot to ``DERIVED_SLOTS``) to give models a new quantity; the
+indices below follow."""
 
 PARAMETER_VECTOR_NAMES: tuple[str, ...] = tuple(slot.name for slot in PARAMETER_SLOTS)
 PARAMETER_COUNT = len(PARAMETER_SLOTS)
 PARAMETER_INDEX: dict[str, int] = {name: index for index, name in enumerate(PARAMETER_VECTOR_NAMES)}
-P_GRAVITY = PARAMETER_INDEX["g"]
-P_LENGTH = PARAMETER_INDEX["L"]
-P_K2 = PARAMETER_INDEX["k2"]
-P_OMEGA_X = PARAMETER_INDEX["omega_x"]
-P_OMEGA_Y = PARAMETER_INDEX["omega_y"]
-P_OMEGA_Z = PARAMETER_INDEX["omega_z"]
-P_CENTRIFUGAL = PARAMETER_INDEX["centrifugal"]
+INDEX_CONSTANTS: dict[str, int] = index_constants(PARAMETER_SLOTS)
+"""Every index constant by name, as defined at module level (``P_GRAVITY = 0`` ...), derived from the table."""
+
+# The built-in slots' constants, declared for readers and type checkers; the values come from the table.
+P_GRAVITY: int
+P_LENGTH: int
+P_K2: int
+P_OMEGA_X: int
+P_OMEGA_Y: int
+P_OMEGA_Z: int
+P_CENTRIFUGAL: int
+globals().update(INDEX_CONSTANTS)
+
+
+def _layout(parameters_class: type) -> tuple[ParameterSlot, ...]:
+    return PARAMETER_SLOTS if parameters_class is PendulumParameters else parameter_slots(parameters_class)
 
 
 def _exact_cos_sin_deg(angle_deg: float) -> tuple[float, float]:

@@ -2,26 +2,68 @@
 from the model's one source, models/base.py), and heyoka's symbolic Jacobian matches the numba right-hand side.
 
 Samples: 1,200 random states per model, positions uniform in a disc of radius L/2 (well inside the sphere),
-velocities uniform in a square of half-side k·L/2 (the pendulum's speed scale), parameters drawn from several
-latitudes (both hemispheres, equator, poles), two lengths, centrifugal on and off, and both Earth's rate and a
-fast rotation (Ω = 0.2 k) that makes every rotation term of order one, so a wrong sign or factor in any term
-shows far above round-off.
+velocities uniform in a square of half-side k·L/2 (the pendulum's speed scale), and parameters varying every
+field of ``PendulumParameters`` (the list is derived from the dataclass, so a new field is varied without
+editing this file): the fields with a sampler in ``SAMPLERS`` as drawn there (several latitudes in both
+hemispheres, equator, poles; two lengths; Earth's gravity and the Moon's; centrifugal on and off; Earth's rate
+and a fast rotation Ω = 0.2 k that makes every rotation term of order one, so a wrong sign or factor in any
+term shows far above round-off), every other field half the time at its default and half the time at an
+example value that a model declares for it (``Model.example_parameters``).
 """
 
 from __future__ import annotations
+
+import dataclasses
+from typing import Any, Callable
 
 import heyoka
 import numpy as np
 import pytest
 
 from foucault_bench.models import MODELS, Model, PendulumParameters
-from foucault_bench.models.parameters import P_K2, P_LENGTH, PARAMETER_COUNT
+from foucault_bench.models.parameters import P_K2, P_LENGTH, PARAMETER_COUNT, PARAMETER_VECTOR_NAMES
 
 N_SAMPLES = 1200
 LATITUDES_DEG = (-90.0, -48.846, -10.0, 0.0, 30.0, 48.846, 90.0)
 LENGTHS_M = (3.0, 67.0)
+GRAVITIES_M_S2 = (9.81, 1.62)
 RHS_AGREEMENT = 1.0e-14
 """Relative to each component's scale (max |component| over the sample): a few ulps of reordered arithmetic."""
+
+SAMPLERS: dict[str, Callable[[np.random.Generator, dict], Any]] = {
+    "length_m": lambda rng, drawn: LENGTHS_M[rng.integers(len(LENGTHS_M))],
+    "latitude_deg": lambda rng, drawn: LATITUDES_DEG[rng.integers(len(LATITUDES_DEG))],
+    "amplitude_m": lambda rng, drawn: 0.5 * drawn["length_m"],
+    "gravity_m_s2": lambda rng, drawn: GRAVITIES_M_S2[rng.integers(len(GRAVITIES_M_S2))],
+    "earth_rate_rad_s": lambda rng, drawn: (0.2 * np.sqrt(drawn["gravity_m_s2"] / drawn["length_m"])
+                                            if rng.random() < 0.5 else 7.2921159e-5),
+    "release_azimuth_deg": lambda rng, drawn: float(rng.uniform(0.0, 360.0)),
+    "release_velocity_m_s": lambda rng, drawn: tuple(float(v) for v in rng.uniform(-0.1, 0.1, 2)),
+    "centrifugal": lambda rng, drawn: bool(rng.random() < 0.5),
+}
+"""How the built-in fields are drawn, in field order (each may read the fields drawn before it)."""
+
+
+def field_choices() -> dict[str, tuple]:
+    """For each field without a sampler: its default and every example value a model declares for it."""
+    choices = {}
+    for spec in dataclasses.fields(PendulumParameters):
+        if spec.name not in SAMPLERS:
+            examples = {model.example_parameters[spec.name] for model in MODELS.values()
+                        if spec.name in model.example_parameters}
+            choices[spec.name] = (spec.default, *sorted(examples, key=repr))
+    return choices
+
+
+def random_parameters(rng: np.random.Generator) -> PendulumParameters:
+    drawn: dict = {}
+    choices = field_choices()
+    for spec in dataclasses.fields(PendulumParameters):
+        if spec.name in SAMPLERS:
+            drawn[spec.name] = SAMPLERS[spec.name](rng, drawn)
+        else:
+            drawn[spec.name] = choices[spec.name][rng.integers(len(choices[spec.name]))]
+    return PendulumParameters(**drawn)
 
 
 def random_sample(seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -30,21 +72,29 @@ def random_sample(seed: int) -> tuple[np.ndarray, np.ndarray]:
     states = np.empty((N_SAMPLES, 4))
     pars = np.empty((N_SAMPLES, PARAMETER_COUNT))
     for i in range(N_SAMPLES):
-        length = LENGTHS_M[rng.integers(len(LENGTHS_M))]
-        k = np.sqrt(9.81 / length)
-        fast = rng.random() < 0.5
-        params = PendulumParameters(
-            length_m=length,
-            latitude_deg=LATITUDES_DEG[rng.integers(len(LATITUDES_DEG))],
-            amplitude_m=0.5 * length,
-            earth_rate_rad_s=0.2 * k if fast else 7.2921159e-5,
-            centrifugal=bool(rng.random() < 0.5),
-        )
+        params = random_parameters(rng)
+        length, k = params.length_m, params.pendulum_frequency_rad_s
         radius = 0.5 * length * np.sqrt(rng.random())
         angle = 2.0 * np.pi * rng.random()
         states[i] = (radius * np.cos(angle), radius * np.sin(angle), *(0.5 * k * length * rng.uniform(-1, 1, 2)))
         pars[i] = params.parameter_vector()
     return states, pars
+
+
+def test_the_sample_varies_every_field_and_every_parameter_slot() -> None:
+    """Every field of ``PendulumParameters`` takes two values or more over the sample (a new field needs a model
+    that declares an example value for it, ``Model.example_parameters``), and so does every slot of the
+    parameter vector (omega_y is 0 by the frame's convention and is the one exception)."""
+    rng = np.random.default_rng(1)
+    drawn = [random_parameters(rng) for _ in range(200)]
+    for spec in dataclasses.fields(PendulumParameters):
+        values = {repr(getattr(params, spec.name)) for params in drawn}
+        assert len(values) >= 2, (f"{spec.name} is never varied: declare an example value for it in the "
+                                  "example_parameters of the model that reads it")
+    _, pars = random_sample(seed=1)
+    for slot_name, column in zip(PARAMETER_VECTOR_NAMES, pars.T, strict=True):
+        if slot_name != "omega_y":
+            assert np.unique(column).size >= 2, slot_name
 
 
 def heyoka_rhs(model: Model):

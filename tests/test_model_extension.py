@@ -84,3 +84,115 @@ def test_a_model_written_in_a_test_runs_through_the_machinery() -> None:
     energy = np.array([DAMPED.numba_energy(*row, p) for row in solution.y])
     gamma = LAB.pendulum_frequency_rad_s / QUALITY_FACTOR
     np.testing.assert_allclose(energy / energy[0], np.exp(-gamma * grid), rtol=1.0 / QUALITY_FACTOR**2)
+
+
+# --- models extend by declaration ----------------------------------------------------------------------------
+
+STIFFENING = 0.1
+"""Relative extra stiffness of the test refinement below when its switch is off."""
+
+
+def stiffened_force(m, x, y, z, vx, vy, vz, p):
+    """The linear force plus an extra spring (1 − c)·κk² acting only when the switch c = p[P_CENTRIFUGAL] is off
+    (a test refinement: at the switch's default, on, it is the linear model exactly)."""
+    k2 = p[P_K2] * (1.0 + STIFFENING * (1.0 - p[parameters.P_CENTRIFUGAL]))
+    a = p[P_OMEGA_Z]
+    return -k2 * x + 2.0 * a * vy, -k2 * y - 2.0 * a * vx, 0.0 * z
+
+
+STIFFENED = Model(name="stiffened_linear_test", title="stiffened linear (test)", geometry="plane",
+                  free_force=stiffened_force, energy=linear_energy, energy_name="E", conserves_energy=False,
+                  hamiltonian=True, refines=("linear",), example_parameters={"centrifugal": False},
+                  adds_parameters=("centrifugal",))
+
+
+@pytest.fixture
+def registered_stiffened(monkeypatch):
+    """``STIFFENED`` in the model registry for one test, as a discovered module's ``MODEL`` would be."""
+    import foucault_bench.models as models
+
+    monkeypatch.setitem(models.MODELS, STIFFENED.name, STIFFENED)
+    yield STIFFENED
+
+
+def test_a_new_parameter_field_gets_its_index_constant_and_slot_from_the_table() -> None:
+    import dataclasses
+
+    @dataclasses.dataclass(frozen=True)
+    class AnisotropicParameters(PendulumParameters):
+        anisotropy: float = dataclasses.field(default=0.0, metadata=parameters.rule(unit="1"))
+
+    slots = parameters.parameter_slots(AnisotropicParameters)
+    constants = parameters.index_constants(slots)
+    assert constants["P_ANISOTROPY"] == len(PARAMETER_SLOTS) == PARAMETER_COUNT
+    assert {name: constants[name] for name in parameters.INDEX_CONSTANTS} == parameters.INDEX_CONSTANTS
+    vector = AnisotropicParameters(length_m=3.0, latitude_deg=48.846, amplitude_m=0.3, anisotropy=0.25).parameter_vector()
+    assert vector.shape == (PARAMETER_COUNT + 1,) and vector[constants["P_ANISOTROPY"]] == 0.25
+    # the built-in constants are the module's, derived from the same table
+    for name, index in parameters.INDEX_CONSTANTS.items():
+        assert getattr(parameters, name) == index
+    assert parameters.P_CENTRIFUGAL == PARAMETER_SLOTS.index(
+        next(slot for slot in PARAMETER_SLOTS if slot.name == "centrifugal"))
+
+
+def test_a_model_refuses_example_parameters_that_exercise_nothing() -> None:
+    common = dict(title="t", geometry="plane", free_force=stiffened_force, energy=linear_energy, energy_name="E",
+                  conserves_energy=False, hamiltonian=True)
+    with pytest.raises(ValueError, match="no field"):
+        Model(name="bad", example_parameters={"stiffness": 1.0}, **common)
+    with pytest.raises(ValueError, match="is its default"):
+        Model(name="bad", example_parameters={"centrifugal": True}, **common)
+    with pytest.raises(ValueError, match="no example value"):
+        Model(name="bad", adds_parameters=("centrifugal",), **common)
+
+
+def test_selftest_checks_a_refinement_at_its_example_parameters_not_where_it_equals_its_parent() -> None:
+    from foucault_bench.bench.gate.conformance import ORDER_PARAMS, check_order, order_parameters
+
+    assert STIFFENED.equals_parents_at(ORDER_PARAMS)
+    params = order_parameters(STIFFENED)
+    assert params.centrifugal is False and not STIFFENED.equals_parents_at(params)
+    assert dataclasses_replace_equals(params, ORDER_PARAMS, centrifugal=False)
+    # at the example parameters the model differs from its parent (the extra spring acts) ...
+    state = np.array([0.1, 0.2, -0.05, 0.3])
+    assert not np.allclose(STIFFENED.numba_rhs(0.0, state, params.parameter_vector()),
+                           MODELS["linear"].numba_rhs(0.0, state, params.parameter_vector()))
+    # ... and the order check runs there and says so
+    check = check_order(get_integrator("rk4"), STIFFENED)
+    assert check.holds is True and "centrifugal = False" in check.detail and "held" in check.detail, check
+
+
+def dataclasses_replace_equals(params: PendulumParameters, base: PendulumParameters, **changes) -> bool:
+    import dataclasses
+
+    return params == dataclasses.replace(base, **changes)
+
+
+@pytest.mark.usefixtures("fresh_reference_cache")
+def test_a_refinement_at_its_parents_values_adds_no_adequacy_row_and_no_reference_run(registered_stiffened,
+                                                                                       monkeypatch) -> None:
+    import dataclasses
+
+    from foucault_bench.bench.problems import adequacy
+    from foucault_bench.bench.problems.scenes import SCENES
+
+    models_run: list[str] = []
+    real_reference_for = adequacy.reference_for
+
+    def recording_reference_for(scene):
+        models_run.append(scene.model)
+        return real_reference_for(scene)
+
+    monkeypatch.setattr(adequacy, "reference_for", recording_reference_for)
+    scene = dataclasses.replace(SCENES["pantheon"], name="pantheon_short", duration_s=120.0)
+    assert scene.params.centrifugal is True  # the switch at its default: the refinement is the linear model
+    rows = adequacy.model_adequacy(scene)
+    assert STIFFENED.name not in {row["model"] for row in rows} and STIFFENED.name not in models_run
+    assert {row["model"] for row in rows} == {"seed_planar", "spherical"}
+    # with the switch off the refinement acts, and the study compares it with its parent
+    switched = dataclasses.replace(scene, name="pantheon_switched",
+                                   params=dataclasses.replace(scene.params, centrifugal=False))
+    rows = {row["model"]: row for row in adequacy.model_adequacy(switched)}
+    assert rows[STIFFENED.name]["simpler_model"] == "linear"
+    # a 10 % stiffer spring shifts the swing frequency by ≈ 5 %: the trajectories part by O(A) within 120 s
+    assert rows[STIFFENED.name]["trajectory_gap"] > 0.1

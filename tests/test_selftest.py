@@ -70,3 +70,27 @@ def test_bad_input_exits_2_with_one_line(argv, expected, capsys) -> None:
     status, out, err = run_cli(argv, capsys)
     assert status == 2 and out == ""
     assert err.count("\n") == 1 and expected in err and "Traceback" not in err, err
+
+
+def test_the_stability_line_states_the_measurement_the_criterion_and_the_verdict() -> None:
+    """An energy error of 1 that stays 1 (RK4 just below its limit damps the swing away) is bounded: the line
+    says so, with both measurements and the bound; growth beyond the bound is stated as not held."""
+    from foucault_bench.bench.gate.conformance import GROWTH_ALLOWANCE, ROUND_OFF_GROWTH, stability_verdict
+
+    holds, line = stability_verdict(1.715, 1.0, 1.0)
+    assert holds is True
+    assert "max relative energy error 1.000e+00 after" in line and ": held" in line and "not growing" in line
+    assert f"{1.0 * (1 + GROWTH_ALLOWANCE) + ROUND_OFF_GROWTH:.3e}" in line
+    holds, line = stability_verdict(1.715, 1e-3, 2e-3)
+    assert holds is False and "NOT held, it grew" in line and "large" not in line
+    holds, line = stability_verdict(1.715, 1e-12, 1.5e-12)
+    assert holds is True and line.endswith(": held")
+
+
+def test_every_applied_line_of_the_command_says_whether_it_held(capsys) -> None:
+    status, out, _ = run_cli(["selftest", "rk4"], capsys)
+    assert status == 0
+    for line in out.splitlines()[:-1]:
+        label, _, rest = line.partition("  ")
+        if rest.startswith(("order on", "stable below", "diverges above")):
+            assert label.strip() == "ok" and rest.count(": held") == 1, line

@@ -155,11 +155,10 @@ def _compute(scene: Scene, key: str) -> Reference:
 
 def _derive(scene: Scene, t: np.ndarray, y: np.ndarray, **provenance: Any) -> Reference:
     """A ``Reference`` with the turning points and precession rate measured on its grid."""
-    # here, not at the top: the verdicts import scipy.interpolate, which a process that only reads matrices
-    # (and so this module's constants) should not pay
-    from foucault_bench.bench.verdicts.columns import released_from_rest
+    # here, not at the top: the turning points import scipy, which a process that only reads matrices (and so
+    # this module's constants) should not pay. No cycle: bench.verdicts.turning_points imports only models.
     from foucault_bench.bench.verdicts.turning_points import (
-        grid_accelerations, precession_rate, turning_points_from_grid,
+        grid_accelerations, precession_rate, released_from_rest, turning_points_from_grid,
     )
 
     points = turning_points_from_grid(t, y, grid_accelerations(scene.model_object, scene.params, y),

@@ -37,6 +37,7 @@ from foucault_bench.bench.verdicts.turning_points import (
     least_squares_slope,
     precession_rate,
     rate_scale,
+    released_from_rest,
     turning_points_from_grid,
 )
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_OK, Solution
@@ -104,10 +105,6 @@ def max_position_gap(y: np.ndarray, other: np.ndarray, amplitude_m: float) -> fl
         return NAN
     gap = np.hypot(y[:n, 0] - other[:n, 0], y[:n, 1] - other[:n, 1])
     return float(np.max(gap)) / amplitude_m
-
-
-def released_from_rest(params: PendulumParameters) -> bool:
-    return params.release_velocity_m_s == (0.0, 0.0)
 
 
 # --- all verdicts of one run -------------------------------------------------------------------------------------

@@ -272,6 +272,11 @@ def rate_measurement_floor(params: PendulumParameters, output_interval_s: float,
     return rate_error_bound(times, azimuth_error_bound(params, output_interval_s, duration_s))
 
 
+def released_from_rest(params: PendulumParameters) -> bool:
+    """Whether the swing starts at rest, so that t = 0 is itself a turning point (a radius maximum)."""
+    return params.release_velocity_m_s == (0.0, 0.0)
+
+
 def rate_scale(params: PendulumParameters) -> float:
     """Normaliser (rad/s) of precession-rate errors: Ω_E|sin φ|, or Ω_E at the equator (NaN without rotation)."""
     scale = abs(params.vertical_rate_rad_s)
