@@ -67,7 +67,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("reference_error", "REAL", "", "max |r − r_reference| / A over the output grid (real128 heyoka reference)"),
     # cost
     Column("cpu_time_s", "REAL", "s", "median CPU time of the worker thread over the timed repeats (compile excluded): the cost the charts and tables use, independent of machine load and --jobs"),
-    Column("cpu_time_spread_s", "REAL", "s", "max − min of the timed repeats' CPU times (0 with a single repeat, made for runs over 1 s)"),
+    Column("cpu_time_spread_s", "REAL", "s", "max − min of the timed repeats' CPU times (0 with a single repeat: a warm-up over single_repeat_over_s, or a first repeat that alone reaches min_total_s when min_repeats = 1)"),
     Column("wall_time_s", "REAL", "s", "median wall time of the timed repeats (compile excluded): what a user waits, grows when runs share a core"),
     Column("wall_time_spread_s", "REAL", "s", "max − min of the timed repeats' wall times"),
     Column("repeats", "INTEGER", "", "timed repeats after the warm-up"),

@@ -121,8 +121,8 @@ def test_every_policy_repeats_by_its_rules(policy: TimingPolicy, costs_s: list[f
 
 
 def test_the_quick_matrix_repeats_a_fast_run_and_measures_a_spread() -> None:
-    """The quick matrix (min_repeats = 1, min_total_s = 0.05 s, max_repeats = 5; bench/README.md "few timed
-    repeats"): a 10-ms run is repeated 5 times, a 20-ms one 3 times (60 ms ≥ 50 ms), a 0.2-s one once; the
+    """The quick matrix (min_repeats = 1, min_total_s = 0.05 s, max_repeats = 5; bench/README.md "How a run is
+    measured"): a 10-ms run is repeated 5 times, a 20-ms one 3 times (60 ms ≥ 50 ms), a 0.2-s one once; the
     default policy (3 repeats and 0.5 s, at most 20) repeats a 10-ms run 20 times and a 0.2-s one 3 times,
     and a run whose warm-up took 1.5 s once."""
     from foucault_bench.bench.run.matrix import load_matrix
