@@ -257,19 +257,26 @@ def test_diverged_and_failed_runs_are_drawn_above_the_data(charts: dict[str, Cha
     assert no_values > 0  # the fixture has an ok run without a value: the check above ran
 
 
+def assert_sweep_lines(traces: list[dict], sweep_rows: pd.DataFrame, setting: str, scene: str) -> None:
+    """Each integrator's line of a sweep chart (reference error against ``setting``, kh or tol) holds exactly its
+    plottable runs, and its runs that are not ok are drawn at their settings in its "not ok" trace."""
+    for integrator, runs in sweep_rows.groupby("integrator"):
+        lines = [t for t in traces if t.get("mode") == "lines+markers" and integrator_of(t) == integrator]
+        expected = pairs(plottable(runs, setting, "reference_error"), setting, "reference_error")
+        assert len(lines) == (1 if expected else 0), (scene, integrator)
+        assert not expected or same_points(points(lines[0]), expected), (scene, integrator)
+        not_ok = runs[runs["status"] != "ok"]
+        drawn = [t for t in traces if t["name"] == f"{integrator} not ok"]
+        assert sorted(decode(drawn[0]["x"]) if drawn else []) == pytest.approx(sorted(not_ok[setting])), integrator
+
+
 def test_convergence_charts_show_each_scenes_fixed_step_runs(charts: dict[str, Chart], rows: pd.DataFrame) -> None:
     for scene, scene_rows in rows.groupby("scene"):
         chart = charts[f"figures/convergence_{stem_part(scene)}"]
         assert chart.title.startswith(f"{scene}: convergence"), chart.title
         fixed = scene_rows[scene_rows["tol"].isna()]
         traces = chart.traces()
-        for integrator, runs in fixed.groupby("integrator"):
-            lines = [t for t in traces if t.get("mode") == "lines+markers" and integrator_of(t) == integrator]
-            expected = pairs(plottable(runs, "kh", "reference_error"), "kh", "reference_error")
-            assert len(lines) == (1 if expected else 0) and same_points(points(lines[0]), expected), (scene, integrator)
-            not_ok = runs[runs["status"] != "ok"]
-            drawn = [t for t in traces if t["name"] == f"{integrator} not ok"]
-            assert sorted(decode(drawn[0]["x"]) if drawn else []) == pytest.approx(sorted(not_ok["kh"])), integrator
+        assert_sweep_lines(traces, fixed, "kh", scene)
         assert {t["name"] for t in traces if t["name"].startswith("slope ")} == {
             f"slope {order}" for order in fixed["declared_order"].dropna().astype(int).unique()}
         assert not set(scene_rows.loc[scene_rows["tol"].notna(), "integrator"]) & {integrator_of(t) for t in traces}
@@ -281,13 +288,7 @@ def test_tolerance_charts_show_each_scenes_adaptive_runs(charts: dict[str, Chart
         assert chart.title.startswith(f"{scene}: achieved error"), chart.title
         adaptive = scene_rows[scene_rows["tol"].notna()]
         traces = chart.traces()
-        for integrator, runs in adaptive.groupby("integrator"):
-            lines = [t for t in traces if t.get("mode") == "lines+markers" and integrator_of(t) == integrator]
-            expected = pairs(plottable(runs, "tol", "reference_error"), "tol", "reference_error")
-            assert len(lines) == 1 and same_points(points(lines[0]), expected), (scene, integrator)
-            drawn = [t for t in traces if t["name"] == f"{integrator} not ok"]
-            not_ok = runs[runs["status"] != "ok"]
-            assert sorted(decode(drawn[0]["x"]) if drawn else []) == pytest.approx(sorted(not_ok["tol"])), integrator
+        assert_sweep_lines(traces, adaptive, "tol", scene)
         diagonal = [t for t in traces if t["name"] == "error = tolerance"]
         assert len(diagonal) == 1
         assert sorted(points(diagonal[0])) == [(adaptive["tol"].min(),) * 2, (adaptive["tol"].max(),) * 2]
