@@ -149,6 +149,16 @@ def test_shipped_bounds_state_their_basis():
         assert bound.basis.startswith(("theory: ", "measured: ")), f"bound #{bound.number} has no basis"
 
 
+def test_check_names_the_integrators_no_bound_checks(gate_run, capsys):
+    """The shipped bounds select every quick-matrix integrator and neither mutant (``gate_run``): the note names
+    the mutants, and only them."""
+    capsys.readouterr()
+    run_cli(["check", "--thresholds", "default", "--results", str(gate_run["db"])])
+    notes = [line for line in capsys.readouterr().err.splitlines() if "have no bound" in line]
+    assert len(notes) == 1, notes
+    assert notes[0].endswith(f"nothing checks them: {', '.join(sorted(MUTANT_OF.values()))}"), notes[0]
+
+
 def test_wrong_integrators_fail_the_shipped_bounds(gate_run):
     """The shipped bounds of rk4 and verlet, retargeted to their mutants, fail on the mutants' rows."""
     shipped = tomllib.loads(DEFAULT_THRESHOLDS.read_text(encoding="utf-8"))

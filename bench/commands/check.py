@@ -81,6 +81,10 @@ def main(args: argparse.Namespace) -> int:
     validate_against(thresholds, frame, what=what)
     outcomes = evaluate(thresholds, frame)
     print(f"checking {thresholds.source} against {what}", file=sys.stderr)
+    unbounded = sorted(set(frame["integrator"]) - {outcome.integrator for outcome in outcomes})
+    if unbounded:
+        print(f"note: {len(unbounded)} integrator(s) of {what} have no bound in {thresholds.source}, so nothing "
+              f"checks them: {', '.join(unbounded)}", file=sys.stderr)
     print(render(outcomes, markdown=args.format == "markdown"))
     if args.junit:
         with replacing_file(args.junit, "--junit") as temporary:

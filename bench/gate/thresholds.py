@@ -46,7 +46,7 @@ from typing import Any, cast
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.schema import COLUMN_NAMES, VERDICT_COLUMNS
-from foucault_bench.bench.validation import built_in_names, finite_number, read_toml, short_repr, suggestion
+from foucault_bench.bench.validation import finite_number, read_toml, short_repr, suggestion
 
 BUILT_IN_FOLDER = "thresholds"
 """Package folder of the built-in thresholds files (``bench/thresholds/NAME.toml``, package data)."""
@@ -154,11 +154,6 @@ class Thresholds:
 
 
 # --- reading a thresholds file ----------------------------------------------------------------------------------
-
-
-def built_in_thresholds() -> list[str]:
-    """Names of the thresholds files shipped with the package (``bench/thresholds/NAME.toml``)."""
-    return built_in_names(BUILT_IN_FOLDER)
 
 
 def load_thresholds(name_or_path: str | Path) -> Thresholds:
