@@ -284,13 +284,17 @@ def test_the_integrator_table_is_the_registry() -> None:
     assert not wrong, "\n".join(wrong)
 
 
-def test_the_inline_scene_keys_in_bench_readme_are_the_ones_read() -> None:
-    """bench/README.md "Scenes": the keys an inline ``[scene.NAME]`` table may hold, and the required ones."""
-    from foucault_bench.bench.problems.scenes import REQUIRED_KEYS, SCENE_KEYS
+def test_the_scene_keys_in_bench_readme_are_the_reader_table() -> None:
+    """bench/README.md "Scenes": the key table of a ``[scene.NAME]`` table is the one the reader reads
+    (``SCENE_KEY_TABLE``: the scene's own keys and one per ``PendulumParameters`` field), each key explained."""
+    from dataclasses import fields
 
-    text = flowing_text(ROOT / "bench" / "README.md")
-    keys_sentence = re.search(r"Keys: (.*?)\. Without `base`, (.*?) are required", text)
-    assert keys_sentence, "bench/README.md: the sentence listing an inline scene's keys is gone"
-    listed, required = (re.findall(r"`([a-z][a-z0-9_]*)`", part) for part in keys_sentence.groups())
-    assert sorted(listed) == sorted(set(SCENE_KEYS) - {"base"}), (listed, SCENE_KEYS)
-    assert sorted(required) == sorted(REQUIRED_KEYS), (required, REQUIRED_KEYS)
+    from foucault_bench.bench.problems.scene_reader import SCENE_KEY_TABLE, markdown_table
+    from foucault_bench.models import PendulumParameters
+
+    assert markdown_table() in (ROOT / "bench" / "README.md").read_text(encoding="utf-8")
+    keys = [key.name for key in SCENE_KEY_TABLE]
+    assert {field.name for field in fields(PendulumParameters)} <= set(keys) and len(set(keys)) == len(keys)
+    unexplained = [key.name for key in SCENE_KEY_TABLE if len(key.meaning) < 10]
+    assert not unexplained, f"scene keys without a meaning (a PendulumParameters field missing from its " \
+                            f"docstring's Attributes?): {unexplained}"

@@ -5,6 +5,7 @@ the bob below the pivot's height)."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import threading
 import time
@@ -16,8 +17,10 @@ import foucault_bench.bench.problems.reference as reference_module
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.reference import CACHE_ENVIRONMENT_VARIABLE, cache_directory, load_cached, reference_for, reference_key
 from foucault_bench.bench.problems.scenes import (
-    MAX_SCENE_NAME_LENGTH, MIN_OUTPUT_INTERVALS_PER_PERIOD, SCENES, scene_from_mapping,
+    MAX_SCENE_NAME_LENGTH, MIN_OUTPUT_INTERVALS_PER_PERIOD, SCENE_DIRECTORY, SCENES, SEED_EARTH_RATE_RAD_S,
+    load_scene_files, scene_from_mapping,
 )
+from foucault_bench.bench.run.matrix import load_matrix
 from foucault_bench.models import MODELS
 
 REAL_PENDULUMS = ("pantheon", "un_headquarters", "griffith", "south_pole", "lab_3m")
@@ -39,13 +42,17 @@ def problems_of(name: str, mapping: dict) -> list[str]:
 
 
 def test_the_built_in_scenes_are_the_ones_promised() -> None:
+    """bench/scenes/builtin.toml holds these nine (another file of the folder may add more)."""
     north_south = {"lab_3m_ns", "quito_3m_ns"}
-    assert set(REAL_PENDULUMS) | {"airy_3m", "seed_2min"} | north_south == set(SCENES)
+    builtin = load_scene_files([SCENE_DIRECTORY / "builtin.toml"])
+    assert set(REAL_PENDULUMS) | {"airy_3m", "seed_2min"} | north_south == set(builtin)
+    assert all(SCENES[name] == scene for name, scene in builtin.items())
     for name in north_south:  # released towards the South, on the model that has the horizontal part of ω
         assert SCENES[name].params.release_azimuth_deg == 0.0 and SCENES[name].model == "spherical"
     assert abs(SCENES["quito_3m_ns"].params.latitude_deg) < 1.0 < SCENES["lab_3m_ns"].params.latitude_deg
     assert SCENES["seed_2min"].model == "linear" and SCENES["airy_3m"].model == "spherical"
     assert SCENES["seed_2min"].params.earth_rate_rad_s == pytest.approx(2 * math.pi / 86400, rel=1e-15)
+    assert SCENES["seed_2min"].params.earth_rate_rad_s == SEED_EARTH_RATE_RAD_S  # the file writes out this double
     assert SCENES["seed_2min"].duration_s == 120.0
 
 
@@ -70,6 +77,79 @@ def test_real_scenes_turn_at_the_quoted_rate(name: str) -> None:
     quoted = {"pantheon": -11.3, "un_headquarters": -9.8, "griffith": -8.4, "south_pole": 15.04, "lab_3m": -9.76}
     rate_deg_h = math.degrees(SCENES[name].params.textbook_precession_rate_rad_s) * 3600.0
     assert rate_deg_h == pytest.approx(quoted[name], abs=0.05)
+
+
+def _toml_value(value) -> str:
+    """A value as TOML writes it: independent of the reader (floats by ``repr``, which round-trips a double)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(item) for item in value) + "]"
+    if isinstance(value, str):
+        return json.dumps(value, ensure_ascii=False)  # a JSON string is a TOML basic string
+    return repr(float(value))
+
+
+def _scene_table(scene) -> str:
+    """``scene`` as a ``[scene.NAME]`` table giving every key, defaults included."""
+    values = {"model": scene.model, **dataclasses.asdict(scene.params), "duration_s": scene.duration_s,
+              "output_interval_s": scene.output_interval_s, "title": scene.title, "why_model": scene.why_model,
+              "source": scene.source, "assumptions": scene.assumptions}
+    return "\n".join([f"[scene.{scene.name}]"] + [f"{key} = {_toml_value(value)}" for key, value in values.items()])
+
+
+@pytest.mark.parametrize("name", list(SCENES))
+def test_every_built_in_scene_round_trips_through_toml_to_the_last_bit(name: str, tmp_path) -> None:
+    """Written out as a TOML table and read back by the scene reader, each built-in scene is the same scene:
+    every field equal, and the problem it poses (parameter vector, release, output grid) the same bytes."""
+    scene = SCENES[name]
+    path = tmp_path / "written.toml"
+    path.write_text(_scene_table(scene), encoding="utf-8")
+    (read,) = load_scene_files([path]).values()
+    assert read == scene
+    for field in dataclasses.fields(scene.params):
+        assert repr(getattr(read.params, field.name)) == repr(getattr(scene.params, field.name)), field.name
+    written, original = read.problem(), scene.problem()
+    assert written.model is original.model
+    assert written.t_out.tobytes() == original.t_out.tobytes()
+    assert written.params.parameter_vector().tobytes() == original.params.parameter_vector().tobytes()
+    assert written.params.initial_state().tobytes() == original.params.initial_state().tobytes()
+
+
+def test_every_file_of_the_scene_folder_is_read_in_name_order_and_a_name_twice_is_an_error(tmp_path) -> None:
+    """A second scene file (such as bench/scenes/real_halls.toml) adds its scenes after the first file's and may
+    start from them; a name another file defines, or a key other than [scene.NAME], is refused naming the file."""
+    (tmp_path / "builtin.toml").write_bytes((SCENE_DIRECTORY / "builtin.toml").read_bytes())
+    (tmp_path / "more.toml").write_text('[scene.pantheon_2h]\nbase = "pantheon"\nduration_s = 7200.0\n',
+                                        encoding="utf-8")
+    scenes = load_scene_files(sorted(tmp_path.glob("*.toml")))
+    assert list(scenes) == [*load_scene_files([tmp_path / "builtin.toml"]), "pantheon_2h"]
+    assert scenes["pantheon_2h"].params == SCENES["pantheon"].params and scenes["pantheon_2h"].duration_s == 7200.0
+
+    twice = tmp_path / "twice.toml"
+    twice.write_text('title = "x"\n[scene.lab_3m]\nbase = "pantheon"\n', encoding="utf-8")
+    with pytest.raises(InputError) as error:
+        load_scene_files(sorted(tmp_path.glob("*.toml")))
+    assert error.value.problems == [
+        f"{twice}: unknown key 'title'; a scene file holds only [scene.NAME] tables",
+        f"{twice}: scene.lab_3m: the name 'lab_3m' is taken by a scene of builtin.toml; choose another name",
+    ]
+
+
+def test_a_scene_file_and_a_matrix_refuse_a_bad_scene_table_with_the_same_messages(tmp_path) -> None:
+    table = ('[scene.bad]\nmodel = "lineer"\nlenght_m = 3.0\nlength_m = 3.0\nlatitude_deg = 91.0\namplitude_m = 3.0\n'
+             'duration_s = 60.0\ncentrifugal = "yes"\n')
+    scene_file, matrix_file = tmp_path / "scenes.toml", tmp_path / "matrix.toml"
+    scene_file.write_text(table, encoding="utf-8")
+    matrix_file.write_text('integrators = ["rk4"]\nkh = [0.1]\n' + table, encoding="utf-8")
+    with pytest.raises(InputError) as from_scene_file:
+        load_scene_files([scene_file])
+    with pytest.raises(InputError) as from_matrix:
+        load_matrix(matrix_file)
+    about_the_scene = [message.removeprefix(f"{matrix_file}: ") for message in from_matrix.value.problems
+                       if "scene.bad" in message]
+    assert len(about_the_scene) == 5
+    assert [message.removeprefix(f"{scene_file}: ") for message in from_scene_file.value.problems] == about_the_scene
 
 
 # --- inline scenes ----------------------------------------------------------------------------------------------

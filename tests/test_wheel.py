@@ -1,5 +1,5 @@
 """The wheel built from the repository: one top-level package, ``foucault_bench``, holding every file of the
-four package folders (sources and the data files commands read: matrices, thresholds, loops.c, the docs that
+four package folders (sources and the data files commands read: matrices, scenes, thresholds, loops.c, the docs that
 generated output and ``--help`` cite)."""
 
 from __future__ import annotations
@@ -56,5 +56,15 @@ def test_the_wheel_holds_every_file_of_the_package_folders(wheel):
     shipped = {name for name in wheel.namelist() if name.startswith("foucault_bench/")}
     missing = sorted(_source_files() - shipped)
     assert not missing, f"not in the wheel (add them to pyproject.toml package-data or packages): {missing}"
-    for data_file in ("bench/perf/loops.c", "bench/matrices/quick.toml", "bench/thresholds/default.toml"):
+    for data_file in ("bench/perf/loops.c", "bench/matrices/quick.toml", "bench/scenes/builtin.toml",
+                      "bench/thresholds/default.toml"):
         assert f"foucault_bench/{data_file}" in shipped
+
+
+def test_the_wheel_holds_every_built_in_scene_file_as_it_is(wheel):
+    """Every ``bench/scenes/*.toml`` (each read at import as built-in scenes, a file added later included) ships
+    byte for byte, so an installed package has the scenes of the checkout."""
+    scene_files = sorted((ROOT / "bench" / "scenes").glob("*.toml"))
+    assert scene_files, "bench/scenes/ holds no scene file"
+    for path in scene_files:
+        assert wheel.read(f"foucault_bench/bench/scenes/{path.name}") == path.read_bytes(), path.name

@@ -12,7 +12,7 @@ A matrix file (read with ``tomllib``) looks like this (bench/README.md "Benchmar
 
     release_azimuth_deg = [0, 45, 90]     # optional: every scene once per release azimuth (scene "NAME-az45")
 
-    [scene.lab]                           # an inline scene, read by bench.problems.scenes.scene_from_mapping
+    [scene.lab]                           # an inline scene, read by bench.problems.scene_reader
     model = "linear"
     ...
 
@@ -55,7 +55,9 @@ from typing import Any
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR, physics_identity
-from foucault_bench.bench.problems.scenes import SCENES, Scene, scene_from_mapping, scene_name_problem
+from foucault_bench.bench.problems.scene import Scene, scene_name_problem
+from foucault_bench.bench.problems.scene_reader import read_scene_tables
+from foucault_bench.bench.problems.scenes import SCENES
 from foucault_bench.bench.run.provenance import code_version, digest
 from foucault_bench.bench.run.timing import TimingPolicy
 from foucault_bench.bench.schema import declared_facts, setting_label
@@ -256,23 +258,8 @@ def _scenes(document: dict[str, Any], problem) -> list[Scene]:
         else:
             problem(f"scenes: unknown scene {short_repr(name)}{suggestion(name, SCENES)}; built-in scenes: {', '.join(SCENES)}")
     inline = document.get("scene", {})
-    if not isinstance(inline, dict):
-        problem(f"scene must be a table of inline scenes ([scene.NAME]), got {short_repr(inline)}")
-        inline = {}
-    for name, mapping in inline.items():
-        where = f"scene.{name}" if scene_name_problem(name) is None else f"scene.{short_repr(name)}"  # one line
-        if name in SCENES:
-            problem(f"{where}: the name {short_repr(name)} is taken by a built-in scene; choose another name")
-            continue
-        if not isinstance(mapping, dict):
-            problem(f"{where} must be a table of scene fields, got {short_repr(mapping)}")
-            continue
-        try:
-            scenes.append(scene_from_mapping(name, mapping))
-        except InputError as error:
-            for message in error.problems:
-                problem(f"{where}: {message}")
-    if not document.get("scenes") and not inline:
+    scenes += read_scene_tables(inline, SCENES, dict.fromkeys(SCENES, "a built-in scene"), problem)
+    if not document.get("scenes") and not (isinstance(inline, dict) and inline):
         problem("no scenes: list built-in ones in scenes = [...] or define [scene.NAME] tables")
     return scenes
 
