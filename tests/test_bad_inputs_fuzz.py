@@ -248,7 +248,7 @@ CASES: tuple[Case, ...] = (
 def snapshot(folder: Path) -> dict[str, str]:
     """Every path under ``folder`` with its kind and, for a file, the SHA-256 of its bytes; but for the shared-
     memory index and empty log every SQLite reader of a write-ahead-log database makes beside it
-    (sqlite.org/wal.html; ``bench.run.store.read_only_connection``), which hold no data."""
+    (sqlite.org/wal.html; ``bench.run.store_schema.read_only_connection``), which hold no data."""
     def reader_file(path: Path) -> bool:
         database = Path(str(path)[:-4])
         return (path.name.endswith("-shm") or (path.name.endswith("-wal") and path.stat().st_size == 0)) \

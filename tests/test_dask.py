@@ -26,7 +26,8 @@ import foucault_bench.bench.run.executors as executors_module
 from foucault_bench.bench.cli import main as cli_main
 from foucault_bench.bench.run.matrix import load_matrix
 from foucault_bench.bench.run.runner import run_matrix
-from foucault_bench.bench.run.store import ResultsStore, compare_runs
+from foucault_bench.bench.run.compare import compare_runs
+from foucault_bench.bench.run.store import ResultsStore
 
 pytestmark = pytest.mark.dask
 

@@ -11,7 +11,8 @@ import pytest
 from foucault_bench.bench.cli import main as cli_main
 from foucault_bench.bench.commands.results import cost_ratio_text
 from foucault_bench.bench.run.matrix import parse_matrix
-from foucault_bench.bench.run.store import COST_COLUMNS, ResultsStore, compare_runs
+from foucault_bench.bench.run.compare import COST_COLUMNS, compare_runs
+from foucault_bench.bench.run.store import ResultsStore
 from test_store import fake_row
 
 MATRIX = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4", "cvode_bdf"], "kh": [0.2, 0.1, 0.05],

@@ -28,7 +28,8 @@ from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.validation import MAX_STEPS
 from foucault_bench.bench.run.matrix import MAX_RUNS, load_matrix, parse_matrix
 from foucault_bench.bench.run.runner import WORKER_DIED, run_matrix
-from foucault_bench.bench.run.store import ResultsStore, compare_runs
+from foucault_bench.bench.run.compare import compare_runs
+from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.integrators import unregister
 
 FAULTY = '''

@@ -13,7 +13,9 @@ from foucault_bench.bench.cli import main as cli_main
 from foucault_bench.bench.problems.scene_key import scene_key
 from foucault_bench.bench.run.matrix import parse_matrix
 from foucault_bench.bench.schema import COLUMN_NAMES
-from foucault_bench.bench.run.store import ResultsStore, compare_runs, summarize
+from foucault_bench.bench.run.compare import compare_runs
+from foucault_bench.bench.run.store import ResultsStore
+from foucault_bench.bench.run.summary import summarize
 
 MATRIX = parse_matrix({"scenes": ["seed_2min"], "integrators": ["rk4", "cvode_bdf"], "kh": [0.2, 0.1],
                        "tol": [1e-6]}, source="test", default_name="store_test")

@@ -32,7 +32,8 @@ def main(args: argparse.Namespace) -> int:
         require_extra("pyarrow", "parquet", "--parquet")
     import pandas as pd
 
-    from foucault_bench.bench.run.store import ResultsStore, summary_text
+    from foucault_bench.bench.run.store import ResultsStore
+    from foucault_bench.bench.run.summary import summary_text
 
     if args.compare and (args.csv or args.parquet or args.all or args.matrix_id):
         raise InputError("--compare takes two matrix ids and no other selection or export option")
@@ -62,7 +63,7 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _compare(store, first: str, second: str) -> int:
-    from foucault_bench.bench.run.store import compare_runs, scene_differences
+    from foucault_bench.bench.run.compare import compare_runs, scene_differences
 
     id_a, id_b = store.resolve_matrix_id(first), store.resolve_matrix_id(second)
     frame_a, frame_b = store.frame(id_a), store.frame(id_b)
@@ -103,7 +104,7 @@ def _exact(value) -> str:
 def unmatched_text(unmatched: list[tuple[str, str]], frame_a, frame_b, differing: set[str]) -> str:
     """The runs in only one matrix run, each with its side; those of a scene whose physics differs between A
     and B (``differing``, named above them) counted per scene and side instead of listed."""
-    from foucault_bench.bench.run.store import run_identity
+    from foucault_bench.bench.run.compare import run_identity
 
     scene_of = {}
     for side, frame, other in (("A", frame_a, frame_b), ("B", frame_b, frame_a)):
@@ -127,7 +128,7 @@ def cost_ratio_text(costs) -> str:
     (``compare_runs``), then, per cost, how many runs were left out and why."""
     import numpy as np
 
-    from foucault_bench.bench.run.store import COST_COLUMNS
+    from foucault_bench.bench.run.compare import COST_COLUMNS
 
     suffix = "_ratio_b_over_a"
     ratios = costs.groupby("integrator")[[f"{column}{suffix}" for column in COST_COLUMNS]].median()

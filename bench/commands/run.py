@@ -48,7 +48,8 @@ def main(args: argparse.Namespace) -> int:
     try:                                            # and a bad address changes nothing
         from foucault_bench.bench.run.matrix import load_matrix, with_run_timeout
         from foucault_bench.bench.run.runner import run_matrix
-        from foucault_bench.bench.run.store import ResultsStore, summary_text
+        from foucault_bench.bench.run.store import ResultsStore
+        from foucault_bench.bench.run.summary import summary_text
 
         matrix = with_run_timeout(load_matrix(args.matrix), args.run_timeout)
         where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{jobs} worker process(es)"

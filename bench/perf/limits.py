@@ -9,7 +9,7 @@
   (linear model, 1 h, 668 output points) at tol = 1e-8. Target ≤ 1.05×.
 * **cpu_time_s against --jobs** (``jobs_limit``): one matrix run with ``--jobs 1`` and again with ``--jobs 2``
   (``foucault-bench run`` in subprocesses, the user's caches), the stored ``cpu_time_s`` of every run compared
-  run by run (``bench.run.store.compare_runs``). Target: every run of ≥ ``JOBS_MIN_RUN_S`` within 15 %, reported
+  run by run (``bench.run.compare.compare_runs``). Target: every run of ≥ ``JOBS_MIN_RUN_S`` within 15 %, reported
   as the worst max(r, 1/r) of the ratio r = --jobs 2 / --jobs 1 (target ≤ 1.15). ``--quick`` runs
   ``JOBS_QUICK_MATRIX`` (the Panthéon hour, one heavy setting per integrator of the quick matrix, 10 ms or
   more where the integrator allows; about 40 s both ways); the full section runs the default matrix both ways
@@ -122,7 +122,7 @@ def jobs_limit(quick: bool) -> tuple[list[Row], list[list[str]]]:
 def compare_jobs(one, two, walls: dict[int, float], name: str) -> tuple[list[Row], list[list[str]]]:
     """Target row for cpu_time_s (runs of ``JOBS_MIN_RUN_S`` or more at --jobs 1), info row for wall_time_s,
     detail lines per integrator, from the stored rows of the same matrix at --jobs 1 (``one``) and 2 (``two``)."""
-    from foucault_bench.bench.run.store import compare_runs
+    from foucault_bench.bench.run.compare import compare_runs
 
     mismatches, costs, _ = compare_runs(one, two)
     ratios = costs["cpu_time_s_ratio_b_over_a"]
@@ -153,7 +153,7 @@ def compare_jobs(one, two, walls: dict[int, float], name: str) -> tuple[list[Row
 
 def _cpu_by_run(frame, costs):
     """cpu_time_s at --jobs 1 of each compared run, aligned with ``costs``."""
-    from foucault_bench.bench.run.store import run_identity
+    from foucault_bench.bench.run.compare import run_identity
 
     by_run = frame.assign(run=run_identity(frame)).set_index("run")["cpu_time_s"]
     return costs["run"].map(by_run).astype(float)

@@ -69,7 +69,8 @@ def probe(matrix_path: str) -> dict[str, float]:
     marks.append(time.perf_counter())
     from foucault_bench.bench.run import runner
     from foucault_bench.bench.run.matrix import load_matrix
-    from foucault_bench.bench.run.store import ResultsStore, summary_text
+    from foucault_bench.bench.run.store import ResultsStore
+    from foucault_bench.bench.run.summary import summary_text
 
     marks.append(time.perf_counter())
     matrix = load_matrix(matrix_path)
