@@ -13,6 +13,7 @@ that callers use with the built-in scenes are imported here too (``__all__``).
 
 from __future__ import annotations
 
+import functools
 import math
 from pathlib import Path
 from typing import Any, Iterable, Mapping
@@ -55,13 +56,16 @@ def load_scene_files(paths: Iterable[Path]) -> dict[str, Scene]:
         problems: list[str] = [f"{source}: unknown key {short_repr(key)}; a scene file holds only [scene.NAME] "
                                "tables" for key in document if key != "scene"]
         loaded = read_scene_tables(document.get("scene", {}), scenes, taken,
-                                   lambda message, source=source, problems=problems:
-                                   problems.append(f"{source}: {message}"))
+                                   functools.partial(_add_problem, problems, source))
         if problems:
             raise InputError(problems)
         scenes.update((scene.name, scene) for scene in loaded)
         taken.update(dict.fromkeys((scene.name for scene in loaded), f"a scene of {path.name}"))
     return scenes
+
+
+def _add_problem(problems: list[str], source: str, message: str) -> None:
+    problems.append(f"{source}: {message}")
 
 
 SCENES: dict[str, Scene] = load_scene_files(sorted(SCENE_DIRECTORY.glob("*.toml")))
