@@ -1,7 +1,7 @@
 """Two matrix runs compared run by run: the deterministic columns bit for bit, the costs as ratios.
 
-``foucault-bench results --compare A B`` prints what ``compare_runs`` finds (bench/README.md, "results
---compare"); ``bench.perf`` uses it to check that two runs of one matrix agree.
+``foucault-bench results --compare A B`` prints what ``compare_runs`` finds (bench/README.md "The results
+store"); ``bench.perf`` uses it to check that two runs of one matrix agree.
 """
 
 from __future__ import annotations

@@ -35,7 +35,7 @@ double-precision unit roundoff (no double-precision integrator can meet it; ``be
 ``MAX_RUNS`` runs in the matrix (counted from the lists' lengths before their entries are checked). Variants of a
 scene made by ``release_azimuth_deg`` are named with ``azimuth_label``, which keeps distinct azimuths distinct;
 no two scenes of a matrix may share a name, and none may have more than ``MAX_SCENE_NAME_LENGTH`` characters
-(``bench.problems.scenes``: what a report's file names fit).
+(``bench.problems.scene``: what a report's file names fit).
 
 Plug-ins (``plugins``) are Python modules: importing one runs its code. They are imported only once the rest
 of the matrix is valid, and each must register at least one integrator.
@@ -308,7 +308,7 @@ def _release_azimuth_variants(scenes: list[Scene], azimuths: Any, problem) -> li
 
 def _check_names(scenes: list[Scene], problem) -> None:
     """Every scene of a matrix has a name of at most ``MAX_SCENE_NAME_LENGTH`` characters, which every file
-    name a report derives from it fits (``bench.problems.scenes``), and a name of its own: rows, references and
+    name a report derives from it fits (``bench.problems.scene``), and a name of its own: rows, references and
     report files are keyed by it."""
     for name, count in Counter(scene.name for scene in scenes).items():
         message = scene_name_problem(name)

@@ -45,7 +45,7 @@ def turning_points_from_grid(t: np.ndarray, y: np.ndarray, accelerations: np.nda
     (t, x, y).
 
     A maximum of the radius lies in every grid interval where r·ṙ changes sign from + to − (this needs an
-    output interval below a quarter period; ``bench.problems.scenes`` enforces a fifth). Around each such
+    output interval below a quarter period; ``bench.problems.scene`` enforces a fifth). Around each such
     interval the trajectory is the Hermite interpolant of position, velocity and acceleration at the
     ``HERMITE_NODES`` nearest grid points (``local_hermite``: degree 17, interpolation error ∝ (ΩΔ)¹⁸/18!, below
     round-off on every built-in scene; Burden & Faires, Numerical Analysis, §3.4), and the turning point is the
