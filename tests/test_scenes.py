@@ -71,6 +71,22 @@ def test_each_built_in_scene_is_complete_and_its_grid_is_uniform(name: str) -> N
     assert problem.model is MODELS[scene.model]
 
 
+@pytest.mark.parametrize("name", list(SCENES))
+def test_the_swing_angles_a_scene_quotes_are_its_own(name: str) -> None:
+    """The prose of a scene file is data too: every swing angle θ₀ = A/L its texts quote (to the digits quoted)
+    and every Airy fraction (3/8)θ₀² (two significant digits) is the one of its length and amplitude."""
+    import re
+
+    scene = SCENES[name]
+    theta0 = scene.params.amplitude_m / scene.params.length_m
+    texts = " ".join((scene.why_model, scene.assumptions, scene.title))
+    for quoted in re.findall(r"θ₀ [=≈] (\d+\.\d+)", texts):
+        decimals = len(quoted.split(".")[1])
+        assert float(quoted) == pytest.approx(theta0, abs=0.5 * 10.0**-decimals + 1e-12), (quoted, theta0)
+    for quoted in re.findall(r"\(3/8\)θ₀² = (\d\.\de-\d+)", texts):
+        assert quoted == f"{0.375 * theta0**2:.1e}", (quoted, theta0)
+
+
 @pytest.mark.parametrize("name", REAL_PENDULUMS)
 def test_real_scenes_turn_at_the_quoted_rate(name: str) -> None:
     # models/README.md "Real pendulums": degrees per hour, clockwise in the north (negative here)
