@@ -2,8 +2,8 @@
 
 How to add an integrator (integrators/README.md "Adding an integrator" has a worked example):
 
-1. Write one module. A built-in goes into this package (``integrators/NAME.py``) and is found by discovery:
-   importing ``foucault_bench.integrators`` imports every module of the package (``integrators.registry``).
+1. Write one module. A built-in goes into ``integrators/methods/NAME.py`` and is found by discovery:
+   importing ``foucault_bench.integrators`` imports every module of ``methods`` (``integrators.registry``).
    A plug-in lives in its own package and is advertised under the entry-point group
    ``foucault_bench.integrators`` (or imported with a matrix's ``plugins = [...]`` or ``selftest --plugin``).
 2. Subclass ``Integrator`` and implement ``_solve``, or subclass ``FixedStepIntegrator``

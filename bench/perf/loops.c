@@ -18,7 +18,7 @@
  *   - four scalar doubles of state, two nested loops (output rows, steps per row: no modulo per step), the
  *     divergence test after every step, the state written to `out` once per row;
  *   - sqrt, not pow(x, 0.5).
- * The numba steps compute the same way (integrators/verlet.py verlet_sequence), so the states stay bitwise equal.
+ * The numba steps compute the same way (integrators/methods/verlet.py verlet_sequence), so the states stay bitwise equal.
  *
  * Each (model, scheme) pair exports two functions:
  *   fb_<model>_<scheme>(state0, p, h, n_steps, stride, out, radius_bound, steps_done) -> status
@@ -36,7 +36,7 @@
 typedef struct {
     double g, length, k2, wx, wy, wz, c;  /* models/parameters.py PARAMETER_VECTOR_NAMES */
     double k;                             /* sqrt(k2): the Gauss solves' norm */
-    /* Verlet sequences (integrators/verlet.py verlet_sequence): sub-steps gamma_i h and the merged rotations */
+    /* Verlet sequences (integrators/methods/verlet.py verlet_sequence): sub-steps gamma_i h and the merged rotations */
     double sub_h[MAX_SUB_STEPS];
     double cos_r[MAX_SUB_STEPS + 1], sin_r[MAX_SUB_STEPS + 1]; /* plane: rotation by -c_i a h about z */
     double rot[MAX_SUB_STEPS + 1][9];                          /* sphere: rotation by -c_i |w| h, row-major */
@@ -54,7 +54,7 @@ static consts make_consts(const double *p) {
 
 static void no_setup(consts *k, double h) { (void)k; (void)h; }
 
-/* integrators/verlet.py _rotation: R = cos a I + sin a [n]x + (1 - cos a) n n^T, a = -|w| c h */
+/* integrators/methods/verlet.py _rotation: R = cos a I + sin a [n]x + (1 - cos a) n n^T, a = -|w| c h */
 static void rotation_matrix(const consts *k, double c, double h, double *r) {
     double rate = sqrt(k->wx * k->wx + k->wy * k->wy + k->wz * k->wz);
     if (rate == 0.0) {
@@ -70,7 +70,7 @@ static void rotation_matrix(const consts *k, double c, double h, double *r) {
     r[6] = u * nz * nx - sin_a * ny; r[7] = u * nz * ny + sin_a * nx; r[8] = cos_a + u * nz * nz;
 }
 
-/* integrators/verlet.py rotation_coefficients: c_0 = g_1/2, c_i = (g_i + g_(i+1))/2, c_n = g_n/2 */
+/* integrators/methods/verlet.py rotation_coefficients: c_0 = g_1/2, c_i = (g_i + g_(i+1))/2, c_n = g_n/2 */
 static void sequence_setup(consts *k, double h, const double *gamma, int n) {
     for (int i = 0; i < n; i++) k->sub_h[i] = gamma[i] * h;
     for (int i = 0; i <= n; i++) {
@@ -84,7 +84,7 @@ static void sequence_setup(consts *k, double h, const double *gamma, int n) {
 
 /* integrators/composition.py triple_jump(4): g_1 = g_3 = 1/(2 - 2^(1/3)), g_2 = 1 - 2 g_1 (as Python rounds them) */
 static const double YOSHIDA4[3] = {1.3512071919596578, -1.7024143839193155, 1.3512071919596578};
-/* integrators/composition6.py: Kahan & Li s9odr6a */
+/* integrators/methods/composition6.py: Kahan & Li s9odr6a */
 static const double COMPOSITION6[9] = {
     0.39216144400731413927925056, 0.33259913678935943859974864, -0.70624617255763935980996482,
     0.08221359629355080023149045, 0.79854399093482996339895035, 0.08221359629355080023149045,
@@ -218,7 +218,7 @@ DEFINE_KICK(spherical, k->wx, k->wy)
 DEFINE_RUNGE_KUTTA_STEPS(linear)
 DEFINE_RUNGE_KUTTA_STEPS(spherical)
 
-/* ---- Verlet sequences (integrators/verlet.py verlet_sequence): Verlet, yoshida4, composition6 ---- */
+/* ---- Verlet sequences (integrators/methods/verlet.py verlet_sequence): Verlet, yoshida4, composition6 ---- */
 
 /* plane: canonical p = v + a z x r; per sub-step the merged rotation then kick, drift, kick */
 static inline void linear_sequence(const consts *k, int n, double *x_, double *y_, double *vx_, double *vy_) {
@@ -314,7 +314,7 @@ static inline void spherical_sequence(const consts *k, int n, double *x_, double
 DEFINE_SEQUENCE_STEPS(linear)
 DEFINE_SEQUENCE_STEPS(spherical)
 
-/* ---- Boris (integrators/boris.py): drift, half kick, Coriolis rotation of v, half kick, drift ---- */
+/* ---- Boris (integrators/methods/boris.py): drift, half kick, Coriolis rotation of v, half kick, drift ---- */
 
 static inline void linear_boris_step(const consts *k, double h, double *x_, double *y_, double *vx_,
                                      double *vy_) {
@@ -334,7 +334,7 @@ static inline void linear_boris_step(const consts *k, double h, double *x_, doub
     *vy_ = vy;
 }
 
-/* integrators/boris.py _geodesic: a great circle at constant speed for a time tau */
+/* integrators/methods/boris.py _geodesic: a great circle at constant speed for a time tau */
 static inline void geodesic(double *x, double *y, double *z, double *vx, double *vy, double *vz, double length,
                             double tau) {
     double speed = sqrt(*vx * *vx + *vy * *vy + *vz * *vz);
