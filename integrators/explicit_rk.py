@@ -60,7 +60,10 @@ def step_source(tableau: ButcherTableau) -> str:
     """Python source of ``make(acceleration)``, returning the tableau's step ``(x, y, vx, vy, h, p) -> state``."""
     a = tableau.a
     lines = ["def make(acceleration):", "    def step(x, y, vx, vy, h, p):"]
-    velocity_x, velocity_y, accel_x, accel_y = ["vx"], ["vy"], [], []
+    velocity_x: list[str] = ["vx"]
+    velocity_y: list[str] = ["vy"]
+    accel_x: list[str] = []
+    accel_y: list[str] = []
     for i in range(tableau.stages):
         if i > 0:
             row = tuple(float(value) for value in a[i][:i])
