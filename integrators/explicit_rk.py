@@ -52,7 +52,8 @@ def _combination(base: str, terms: list[str], coefficients: tuple[float, ...]) -
     if not products:
         return base
     scale = "h" if denominator == 1 else f"(h / {float(denominator)!r})"
-    total = products[0] if len(products) == 1 else f"({' + '.join(products)})"
+    single_term = len(products) == 1 and " " not in products[0]
+    total = products[0] if single_term else f"({' + '.join(products)})"
     return f"{base} + {scale} * {total}"
 
 

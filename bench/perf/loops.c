@@ -4,7 +4,8 @@
  * models/base.py): every expression keeps the operand order of its Python twin, including the multiplications
  * by the zero velocities and zero rotation components that the one-source models carry, so that a C loop and
  * the numba kernel compute the same states (bitwise: neither contracts a*b+c into an FMA). The schemes
- * (integrators/{explicit_euler,symplectic_euler,rk4,verlet,yoshida4,composition6,boris,gauss}.py) and the loop
+ * (integrators/methods/{explicit_euler,symplectic_euler,rk4,heun3,verlet,yoshida4,composition6,boris}.py,
+ * integrators/explicit_rk.py, integrators/gauss.py) and the loop
  * (integrators/fixed_step.py) are written as a C programmer writes them for speed:
  *   - every loop invariant computed once before the loop (make_consts, <scheme>_setup): the parameters read
  *     into local scalars, sqrt(k2) for the Gauss solves, the Boris rotation's cosine and sine, and for the
@@ -101,6 +102,7 @@ static void boris_setup(consts *k, double h) {
 #define explicit_euler_setup no_setup
 #define symplectic_euler_setup no_setup
 #define rk4_setup no_setup
+#define heun3_setup no_setup
 #define implicit_midpoint_setup no_setup
 #define gauss_legendre4_setup no_setup
 
@@ -214,6 +216,22 @@ DEFINE_KICK(spherical, k->wx, k->wy)
         *py = y + sixth * (vy + 2.0 * vy2 + 2.0 * vy3 + vy4);                                                 \
         *pvx = vx + sixth * (k1ax + 2.0 * k2ax + 2.0 * k3ax + k4ax);                                          \
         *pvy = vy + sixth * (k1ay + 2.0 * k2ay + 2.0 * k3ay + k4ay);                                          \
+    }                                                                                                         \
+    /* integrators/methods/heun3.py as integrators/explicit_rk.py generates it: rows (h/D)(integer sums) */    \
+    static inline void model##_heun3_step(const consts *k, double h, double *px, double *py, double *pvx,    \
+                                          double *pvy) {                                                     \
+        double x = *px, y = *py, vx = *pvx, vy = *pvy, third = h / 3.0, quarter = h / 4.0;                    \
+        double k1ax, k1ay, k2ax, k2ay, k3ax, k3ay;                                                            \
+        model##_acceleration(k, x, y, vx, vy, &k1ax, &k1ay);                                                  \
+        double x2 = x + third * vx, y2 = y + third * vy, vx2 = vx + third * k1ax, vy2 = vy + third * k1ay;    \
+        model##_acceleration(k, x2, y2, vx2, vy2, &k2ax, &k2ay);                                              \
+        double x3 = x + third * (2.0 * vx2), y3 = y + third * (2.0 * vy2);                                    \
+        double vx3 = vx + third * (2.0 * k2ax), vy3 = vy + third * (2.0 * k2ay);                              \
+        model##_acceleration(k, x3, y3, vx3, vy3, &k3ax, &k3ay);                                              \
+        *px = x + quarter * (vx + 3.0 * vx3);                                                                 \
+        *py = y + quarter * (vy + 3.0 * vy3);                                                                 \
+        *pvx = vx + quarter * (k1ax + 3.0 * k3ax);                                                            \
+        *pvy = vy + quarter * (k1ay + 3.0 * k3ay);                                                            \
     }
 DEFINE_RUNGE_KUTTA_STEPS(linear)
 DEFINE_RUNGE_KUTTA_STEPS(spherical)
@@ -586,6 +604,7 @@ static void turning_point(double x0, double y0, double vx0, double vy0, double x
 DEFINE_LOOPS(linear, explicit_euler)
 DEFINE_LOOPS(linear, symplectic_euler)
 DEFINE_LOOPS(linear, rk4)
+DEFINE_LOOPS(linear, heun3)
 DEFINE_LOOPS(linear, verlet)
 DEFINE_LOOPS(linear, yoshida4)
 DEFINE_LOOPS(linear, composition6)
@@ -595,6 +614,7 @@ DEFINE_LOOPS(linear, gauss_legendre4)
 DEFINE_LOOPS(spherical, explicit_euler)
 DEFINE_LOOPS(spherical, symplectic_euler)
 DEFINE_LOOPS(spherical, rk4)
+DEFINE_LOOPS(spherical, heun3)
 DEFINE_LOOPS(spherical, verlet)
 DEFINE_LOOPS(spherical, yoshida4)
 DEFINE_LOOPS(spherical, composition6)
