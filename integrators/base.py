@@ -2,8 +2,8 @@
 
 How to add an integrator (integrators/README.md "Adding an integrator" has a worked example):
 
-1. Write one module. A built-in goes into this package (``integrators/NAME.py``) and is found by discovery:
-   importing ``foucault_bench.integrators`` imports every module of the package (``integrators.registry``).
+1. Write one module. A built-in goes into ``integrators/methods/NAME.py`` and is found by discovery:
+   importing ``foucault_bench.integrators`` imports every module of ``methods`` (``integrators.registry``).
    A plug-in lives in its own package and is advertised under the entry-point group
    ``foucault_bench.integrators`` (or imported with a matrix's ``plugins = [...]`` or ``selftest --plugin``).
 2. Subclass ``Integrator`` and implement ``_solve``, or subclass ``FixedStepIntegrator``
@@ -26,7 +26,8 @@ The framework then
 * validates the setting (a step size in s for fixed-step methods, a tolerance in (0, 1) for adaptive ones),
 * turns every exception into a ``failed`` solution with the exception's message, and every non-finite
   state into a ``diverged`` one, so that no run crashes a benchmark matrix,
-* fills ``nfev`` from ``stages × steps`` where the integrator does not count evaluations itself,
+* fills ``nfev`` from ``stages × steps`` where the integrator does not count evaluations itself (the
+  fixed-step and embedded Runge-Kutta loops count theirs: ``integrators.counting``, ``integrators.embedded_rk``),
 * silences the C libraries' chatter on stdout/stderr (SUNDIALS prints its warnings there;
   ``silence_native_output``).
 
@@ -152,10 +153,13 @@ class Integrator(ABC):
         family: grouping for colours and thresholds, e.g. ``"runge-kutta"``; a new family is allowed.
         order: classical order of accuracy p (global error ∝ hᵖ), a positive integer; ``None`` where it varies
             (variable-order multistep, Taylor). For a fixed-step method the tests and ``selftest`` measure it.
-        stages: right-hand-side evaluations per step for fixed-step schemes; the framework fills
-            ``nfev = stages × steps`` from it. ``None`` for adaptive ones, and for a fixed-step scheme whose
-            evaluations vary per step (an implicit method iterated to convergence), which then reports its own
-            ``nfev`` or none.
+        stages: right-hand-side evaluations per step for fixed-step schemes, on the linear model (on a model
+            with a velocity-dependent force other than Coriolis a splitting method evaluates more). A
+            ``FixedStepIntegrator`` counts its evaluations and reports ``nfev`` = count × steps
+            (``integrators.counting``); ``selftest`` fails a scheme whose count on the linear model is not
+            ``stages``. Other integrators get ``nfev = stages × steps`` from it unless they count. ``None`` for
+            adaptive ones, and for a fixed-step scheme whose evaluations vary per step (an implicit method
+            iterated to convergence), which then reports its own ``nfev`` or none.
         adaptive: ``True`` if driven by a tolerance, ``False`` if by a step size.
         stability_limit_kh: largest stable k·h on the undamped oscillator ẍ = −k²x (no rotation), for
             fixed-step methods; ``None`` if unstable for every h > 0 (explicit Euler) or not applicable

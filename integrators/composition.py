@@ -11,7 +11,7 @@ occur, and it has order
 
 ``Composition`` checks symmetry and the power-sum conditions (necessary for the declared order); the observed
 order of every composition is measured by the test suite like any other integrator's. The composition of
-symplectic maps is symplectic, so a composition of the rotating-frame Verlet step (``integrators.verlet``) is
+symplectic maps is symplectic, so a composition of the rotating-frame Verlet step (``integrators.methods.verlet``) is
 symplectic, symmetric and of the declared order (Yoshida, Phys. Lett. A 150, 262 (1990); Suzuki, Phys. Lett.
 A 146, 319 (1990)).
 
@@ -28,7 +28,7 @@ from typing import Callable, ClassVar
 import numpy as np
 
 from foucault_bench.integrators.fixed_step import FixedStepIntegrator
-from foucault_bench.integrators.verlet import RotatingVerlet, verlet_sequence
+from foucault_bench.integrators.methods.verlet import RotatingVerlet, verlet_sequence
 from foucault_bench.models import Model
 
 POWER_SUM_TOLERANCE = 1e-14

@@ -437,6 +437,10 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
         if "tableau" in cls.__dict__:
+            if not (cls.tableau.is_embedded and cls.tableau.has_dense_output):
+                raise TypeError(f"{cls.__name__}: the adaptive driver needs a tableau with error weights and a "
+                                f"dense output ({cls.tableau.name!r} has {'no error weights' if not cls.tableau.is_embedded else 'no dense output'}; "
+                                "a plain tableau is stepped by integrators.explicit_rk.ExplicitRungeKutta)")
             cls.order = cls.tableau.order
 
     def __init__(self, max_steps: int | None = None) -> None:

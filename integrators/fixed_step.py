@@ -11,6 +11,12 @@ This module wraps it in one compiled loop that
   the turning points (maxima of the radius: r·ṙ changes sign from + to −, located on the cubic Hermite
   interpolant of the step; integrators/README.md "Measuring the precession rate");
 * stops at the first non-finite state or when the bob leaves a bound (diverged).
+
+``nfev`` is counted, not declared: the step's right-hand-side evaluations per step are counted once per model by a
+compiled run of the same step on a counting copy of the model (``integrators.counting``), and a run's ``nfev`` is
+that count times its steps, for every scheme that declares a fixed ``stages`` (``None``: an iterative scheme whose
+count varies from step to step reports no ``nfev``). ``foucault-bench selftest`` compares the count with the
+declared ``stages`` (``bench.gate.conformance``).
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ import numpy as np
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from foucault_bench.integrators.base import COST_COMPILED, STATUS_DIVERGED, Integrator, Problem, Solution, StreamedMetrics
+from foucault_bench.integrators.counting import evaluations_per_step
 from foucault_bench.models import Model, PendulumParameters
 from foucault_bench.models.jit import jit
 from foucault_bench.models.parameters import PARAMETER_COUNT
@@ -32,6 +39,12 @@ DIVERGENCE_RADIUS_FACTOR = 1.0e3
 """A run is declared diverged when the bob is farther than this many string lengths from the vertical."""
 
 STATUS_CODE_DIVERGED = 1
+
+COUNTED_STEPS = 8
+"""Steps over which ``FixedStepIntegrator.evaluations_per_step`` counts (any number shows a fixed count)."""
+
+COMPILE_PARAMETERS = PendulumParameters(length_m=1.0, latitude_deg=45.0, amplitude_m=0.1)
+"""The setting of the one-step compile run and of the counted steps (kh = 0.1 from the release at rest)."""
 
 
 @jit
@@ -176,11 +189,26 @@ class FixedStepIntegrator(Integrator):
         """The compiled loop for this scheme and model (compiled on first use, cached on disk by numba)."""
         return build_kernel(self.compiled_step(model), model.numba_energy)
 
+    @functools.lru_cache(maxsize=None)
+    def evaluations_per_step(self, model: Model) -> float:
+        """Right-hand-side evaluations per step, counted over ``COUNTED_STEPS`` steps (``integrators.counting``)."""
+        h = 0.1 / COMPILE_PARAMETERS.pendulum_frequency_rad_s
+        return evaluations_per_step(self.make_step, model, np.array([COMPILE_PARAMETERS.amplitude_m, 0.0, 0.0, 0.0]),
+                                    COMPILE_PARAMETERS.parameter_vector(), h, COUNTED_STEPS)
+
+    def counted_nfev(self, model: Model, steps: int) -> int | None:
+        """``steps`` × the counted evaluations per step, for a scheme that declares a fixed ``stages``; ``None``
+        for one that does not, or whose count is not a whole number per step."""
+        per_step = self.evaluations_per_step(model)
+        return int(per_step) * steps if self.stages is not None and per_step.is_integer() else None
+
     def compile(self, model: Model) -> None:
-        """Compile (or load from numba's cache) the loop for ``model`` with a one-step run."""
-        p = PendulumParameters(length_m=1.0, latitude_deg=45.0, amplitude_m=0.1).parameter_vector()
+        """Compile (or load from numba's cache) the loop for ``model`` with a one-step run, and count its step's
+        evaluations."""
+        p = COMPILE_PARAMETERS.parameter_vector()
         out = np.empty((2, 4))
         self.kernel(model)(np.array([0.1, 0.0, 0.0, 0.0]), p, 0.1, 1, 1, out, True, np.empty((1, 3)), 1.0e3)
+        self.evaluations_per_step(model)
 
     def validate_problem(self, problem: Problem, *, step_s: float | None) -> None:
         uniform_output_stride(problem.t_out, cast(float, step_s))  # validate_setting checked it first
@@ -197,7 +225,8 @@ class FixedStepIntegrator(Integrator):
             problem.initial_state, problem.parameter_vector, h, n_steps, stride, out, monitor, turning,
             radius_bound,
         )
-        solution = Solution(t=problem.t_out, y=out, steps=steps_done, step_size_s=h)
+        solution = Solution(t=problem.t_out, y=out, steps=steps_done, step_size_s=h,
+                            nfev=self.counted_nfev(problem.model, steps_done))
         if status == STATUS_CODE_DIVERGED:
             solution.status = STATUS_DIVERGED
             solution.message = (

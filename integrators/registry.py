@@ -1,9 +1,9 @@
 """The integrator registry: name → integrator instance, filled by discovery.
 
 * **Built-in integrators** are found, not listed: importing ``foucault_bench.integrators`` imports every module
-  of the package (``discover_built_ins``); a module whose classes carry ``@register`` adds them, a helper module
-  (``base``, ``fixed_step``, ``adaptive``, ...) registers nothing. Keep module imports cheap: import heavy
-  libraries inside the functions that need them.
+  of its ``methods`` sub-package (``discover_built_ins``), one module per method, whose classes carry
+  ``@register``; the framework modules one level up (``base``, ``fixed_step``, ``adaptive``, ``tableau``, ...)
+  register nothing. Keep module imports cheap: import heavy libraries inside the functions that need them.
 * **Plug-ins** come from the entry-point group ``foucault_bench.integrators`` (each entry point names a module
   or ``module:Class`` to import; ``load_entry_point_plugins``), or from a module imported before running (a
   matrix's ``plugins = [...]``, ``foucault-bench selftest NAME --plugin MODULE``).
@@ -17,7 +17,6 @@ from __future__ import annotations
 import importlib
 import math
 import pkgutil
-import sys
 import warnings
 from importlib.metadata import entry_points
 from typing import TypeVar
@@ -27,7 +26,10 @@ from foucault_bench.integrators.base import Integrator
 REGISTRY: dict[str, Integrator] = {}
 ENTRY_POINT_GROUP = "foucault_bench.integrators"
 BUILT_IN_PACKAGE = __name__.rpartition(".")[0]
-"""The package whose modules hold the built-in integrators (``foucault_bench.integrators``)."""
+"""The package of the built-in integrators and their framework (``foucault_bench.integrators``)."""
+
+METHODS_PACKAGE = BUILT_IN_PACKAGE + ".methods"
+"""The sub-package whose modules are the built-in methods, one module each (``foucault_bench.integrators.methods``)."""
 
 ENTRY_POINT_MODULES: list[str] = []
 """Modules loaded from entry points, in load order (their sources enter the code version of every run)."""
@@ -99,9 +101,9 @@ def built_in_names() -> list[str]:
 
 
 def discover_built_ins() -> None:
-    """Import every module of the ``foucault_bench.integrators`` package (those that register add themselves)."""
-    package = sys.modules[BUILT_IN_PACKAGE]
-    for module in pkgutil.iter_modules(package.__path__, BUILT_IN_PACKAGE + "."):
+    """Import every module of ``foucault_bench.integrators.methods`` (each registers the methods it defines)."""
+    package = importlib.import_module(METHODS_PACKAGE)
+    for module in pkgutil.iter_modules(package.__path__, METHODS_PACKAGE + "."):
         if not module.name.rpartition(".")[2].startswith("_"):
             importlib.import_module(module.name)
 

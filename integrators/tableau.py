@@ -1,11 +1,15 @@
-"""Butcher tableaux of embedded explicit Runge-Kutta pairs as self-validating data (``ButcherTableau``).
+"""Butcher tableaux of explicit Runge-Kutta methods as self-validating data (``ButcherTableau``).
+
+A tableau is a plain method (``c``, ``a``, ``b``: explicit Euler, RK4, Heun's third-order method, stepped by
+``integrators.explicit_rk``) or, with its optional error weights and dense output, an embedded pair (stepped by
+``integrators.embedded_rk``).
 
 A tableau is checked when it is built, so a mistyped coefficient cannot reach an integration:
 
 * shapes, finite entries, c₁ = 0, an explicit method (``a`` strictly lower triangular);
 * row sums Σⱼ aᵢⱼ = cᵢ (Hairer, Nørsett & Wanner, Solving ODEs I, §II.1, eq. (1.9));
 * the order conditions of the main weights ``b`` up to ``order``, of each embedded solution b − e up to its
-  declared order, and of the dense output up to ``dense_order``: for every rooted tree t with ρ(t) ≤ p,
+  declared order, and of the dense output up to ``dense_order`` (the last two where given): for every rooted tree t with ρ(t) ≤ p,
   Σᵢ bᵢ Φᵢ(t) = 1/γ(t) (HNW I, §II.2, Theorem 2.13; the trees are generated here, 200 of them up to order 8),
   and for a continuous extension with weights bᵢ(θ), Σᵢ bᵢ(θ) Φᵢ(t) = θ^ρ(t)/γ(t) (HNW I, §II.6, Theorem 6.1),
   checked coefficient by coefficient of the polynomials in θ.
@@ -100,14 +104,17 @@ def _vector(values, length: int, what: str) -> np.ndarray:
 
 @dataclass(frozen=True)
 class ButcherTableau:
-    """An embedded explicit Runge-Kutta pair (see the module docstring for the layout and the checks).
+    """An explicit Runge-Kutta method, optionally an embedded pair with dense output (see the module docstring for
+    the layout and the checks).
 
     Attributes:
         name: short name used in messages.
         c, a, b: nodes (s), coefficients (s × s, strictly lower triangular), weights (s) of the main method.
         order: order of the main method (the b weights).
-        error_weights: e (s + 1): the local error estimate is h Σᵢ eᵢ kᵢ; (b, 0) − e has order ``error_order``.
-        error_order: order of that embedded solution.
+        reference: where the coefficients come from.
+        error_weights: e (s + 1): the local error estimate is h Σᵢ eᵢ kᵢ; (b, 0) − e has order ``error_order``;
+            ``None`` for a method without an error estimate (``is_embedded`` is then false).
+        error_order: order of that embedded solution (``None`` exactly when ``error_weights`` is).
         secondary_error_weights, secondary_error_order: DOP853's second embedded solution (order 3) whose
             estimate enters its error norm (Hairer, Nørsett & Wanner I, §II.10); ``None`` otherwise. The order
             of the error estimate then follows (``error_estimator_order``).
@@ -116,8 +123,7 @@ class ButcherTableau:
         dense_hairer: instead of P, the rows D of Hairer's form y_old + θ(F₀ + (1−θ)(F₁ + θ(F₂ + (1−θ)(F₃ + …))))
             with F₀ = Δy = y_new − y_old, F₁ = hk₁ − Δy, F₂ = 2Δy − h(k₁ + k_{s+1}) and F₃₊ᵣ = h Σⱼ Dᵣⱼ kⱼ over
             every stage (Hairer, Nørsett & Wanner I, §II.6; dop853.f, CONTD8).
-        dense_order: order of the continuous extension.
-        reference: where the coefficients come from.
+        dense_order: order of the continuous extension (``None`` exactly when no dense output is given).
     """
 
     name: str
@@ -125,10 +131,10 @@ class ButcherTableau:
     a: tuple[tuple[float, ...], ...]
     b: tuple[float, ...]
     order: int
-    error_weights: tuple[float, ...]
-    error_order: int
-    dense_order: int
     reference: str
+    error_weights: tuple[float, ...] | None = None
+    error_order: int | None = None
+    dense_order: int | None = None
     dense_weights: tuple[tuple[float, ...], ...] = ()
     dense_hairer: tuple[tuple[float, ...], ...] | None = None
     dense_c: tuple[float, ...] = ()
@@ -144,14 +150,26 @@ class ButcherTableau:
     # --- shapes -----------------------------------------------------------------------------------------------
     @property
     def stages(self) -> int:
-        """s: right-hand-side evaluations per step attempt (the last one, f(t + h, y_new), is the next first)."""
+        """s: right-hand-side evaluations per step (per step attempt of a pair, whose f(t + h, y_new) is the next
+        step's first)."""
         return len(self.c)
+
+    @property
+    def is_embedded(self) -> bool:
+        """Whether the tableau carries an error estimate (the adaptive driver needs one, and a dense output)."""
+        return self.error_weights is not None
+
+    @property
+    def has_dense_output(self) -> bool:
+        return self.dense_order is not None
 
     @property
     def error_estimator_order(self) -> int:
         """q such that the estimate behaves like h^(q+1): the controller's exponent is −1/(q + 1) (scipy's
         ``error_estimator_order``). One estimate of order p̂: q = p̂. DOP853's ‖err₅‖²/√(‖err₅‖² + 0.01‖err₃‖²)
         ~ ‖err₅‖²/‖err₃‖ = O(h^(2(p̂+1) − (p̃+1))) with p̂ = 5, p̃ = 3: q = 7."""
+        if self.error_order is None:
+            raise ValueError(f"tableau {self.name!r} has no error estimate")
         if self.secondary_error_order is None:
             return self.error_order
         return 2 * (self.error_order + 1) - (self.secondary_error_order + 1) - 1
@@ -203,7 +221,12 @@ class ButcherTableau:
         try:
             a = np.asarray(self.a, dtype=np.float64)
             b = _vector(self.b, s, "b")
-            _vector(self.error_weights, s + 1, "error_weights")
+            if (self.error_weights is None) != (self.error_order is None):
+                raise ValueError("give error_weights and error_order together, or neither")
+            if self.error_weights is None and self.secondary_error_weights is not None:
+                raise ValueError("secondary_error_weights need error_weights")
+            if self.error_weights is not None:
+                _vector(self.error_weights, s + 1, "error_weights")
             if self.secondary_error_weights is not None:
                 _vector(self.secondary_error_weights, s + 1, "secondary_error_weights")
             _vector(self.dense_c, extra, "dense_c")
@@ -212,19 +235,24 @@ class ButcherTableau:
                 raise ValueError(f"a must be {s} × {s}, got shape {a.shape}")
             if extra and dense_a.shape != (extra, s + 1 + extra):
                 raise ValueError(f"dense_a must be {extra} × {s + 1 + extra}, got shape {dense_a.shape}")
-            if (self.dense_hairer is None) == (len(self.dense_weights) == 0):
-                raise ValueError("give the dense output either as dense_weights or as dense_hairer")
+            given_dense = (self.dense_hairer is not None) + (len(self.dense_weights) != 0)
+            if given_dense > 1 or (given_dense == 1) != (self.dense_order is not None):
+                raise ValueError("give the dense output as dense_weights or as dense_hairer, with dense_order "
+                                 "(or none of them)")
+            if extra and self.dense_order is None:
+                raise ValueError("dense_c and dense_a are stages of a dense output: give it")
             if self.dense_hairer is not None and np.asarray(self.dense_hairer, dtype=np.float64).shape[1:] != (
                     s + 1 + extra,):
                 raise ValueError(f"dense_hairer rows must hold {s + 1 + extra} numbers")
-            if self.dense_matrix().ndim != 2 or self.dense_matrix().shape[0] != s + 1 + extra:
+            if self.has_dense_output and (self.dense_matrix().ndim != 2 or self.dense_matrix().shape[0] != s + 1 + extra):
                 raise ValueError(f"dense_weights must have {s + 1 + extra} rows, got shape {self.dense_matrix().shape}")
         except ValueError as error:
             return [str(error)]
         full_a, full_c = self.extended_a(), self.extended_c()
         problems = []
-        if not all(np.all(np.isfinite(np.asarray(x, dtype=np.float64))) for x in
-                   (full_a, full_c, b, self.error_weights, self.dense_matrix())):
+        optional = ([self.error_weights] if self.is_embedded else []) + (
+            [self.dense_matrix()] if self.has_dense_output else [])
+        if not all(np.all(np.isfinite(np.asarray(x, dtype=np.float64))) for x in (full_a, full_c, b, *optional)):
             return ["every coefficient must be finite"]
         if full_c[0] != 0.0:
             problems.append(f"c[0] must be 0 (the first stage is f(t, y)), got {full_c[0]!r}")
@@ -236,8 +264,10 @@ class ButcherTableau:
         if problems:
             return problems
         stages_a = full_a[: s + 1, : s + 1]
-        checks: list[tuple[str, np.ndarray, int | None]] = [("b", np.concatenate([b, [0.0]]), self.order),
-                  ("b − error_weights", np.concatenate([b, [0.0]]) - np.asarray(self.error_weights), self.error_order)]
+        checks: list[tuple[str, np.ndarray, int | None]] = [("b", np.concatenate([b, [0.0]]), self.order)]
+        if self.error_weights is not None:
+            checks.append(("b − error_weights", np.concatenate([b, [0.0]]) - np.asarray(self.error_weights),
+                           self.error_order))
         if self.secondary_error_weights is not None:
             checks.append(("b − secondary_error_weights",
                            np.concatenate([b, [0.0]]) - np.asarray(self.secondary_error_weights),
@@ -247,7 +277,8 @@ class ButcherTableau:
                 problems.append(f"{what}: order must be an integer in 1…{MAX_CHECKED_ORDER}, got {order!r}")
                 continue
             problems += self._condition_problems(what, stages_a, weights, order)
-        problems += self._dense_problems(full_a)
+        if self.has_dense_output:
+            problems += self._dense_problems(full_a)
         return problems
 
     @staticmethod

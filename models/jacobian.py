@@ -1,5 +1,5 @@
 """The Jacobian of a model's first-order system as a numba-compiled function, for callers that need it from
-compiled code (CVODE's Jacobian callback, ``integrators.cvode``).
+compiled code (CVODE's Jacobian callback, ``integrators.methods.cvode``).
 
 The derivatives are the ones ``Model.jacobian_into`` compiles with heyoka: heyoka differentiates the model's
 own expressions (``Model.heyoka_system``, built from the one force source) symbolically (``heyoka.diff``).

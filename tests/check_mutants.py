@@ -20,7 +20,7 @@ from numba import njit
 
 from foucault_bench.integrators.fixed_step import FixedStepIntegrator
 from foucault_bench.integrators.registry import register
-from foucault_bench.integrators.rk4 import RK4
+from foucault_bench.integrators.methods.rk4 import RK4
 from foucault_bench.models import Model
 
 MUTANT_NAMES = ("rk4_wrong_weights", "verlet_naive_coriolis")
@@ -29,7 +29,7 @@ MUTANT_NAMES = ("rk4_wrong_weights", "verlet_naive_coriolis")
 @register
 class RK4WrongWeights(RK4):
     name: ClassVar[str] = "rk4_wrong_weights"
-    reference: ClassVar[str] = "mutant of integrators.rk4 for tests/test_check.py: weights (1, 3, 1, 1)/6"
+    reference: ClassVar[str] = "mutant of integrators.methods.rk4 for tests/test_check.py: weights (1, 3, 1, 1)/6"
 
     def make_step(self, model: Model) -> Callable:
         acceleration = model.numba_acceleration

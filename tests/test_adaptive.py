@@ -34,13 +34,13 @@ from foucault_bench.bench.verdicts.turning_points import (
     turning_points_from_grid,
     turning_time_error_bound,
 )
-from foucault_bench.integrators.cvode import CvodeAdams, CvodeBdf, CvodeIntegrator
-from foucault_bench.integrators.cvode_py import CvodeAdamsPy, CvodeBdfPy
-from foucault_bench.integrators.dop853 import Dop853
-from foucault_bench.integrators.dopri5 import Dopri5
-from foucault_bench.integrators.heyoka_taylor import REFERENCE_TOLERANCE, HeyokaTaylor, HeyokaTaylorQuad, _compiled_template
-from foucault_bench.integrators.scipy_ivp import ScipyDop853, ScipyLsoda, ScipyRk45
-from foucault_bench.integrators.tsit5 import Tsit5
+from foucault_bench.integrators.methods.cvode import CvodeAdams, CvodeBdf, CvodeIntegrator
+from foucault_bench.integrators.methods.cvode_py import CvodeAdamsPy, CvodeBdfPy
+from foucault_bench.integrators.methods.dop853 import Dop853
+from foucault_bench.integrators.methods.dopri5 import Dopri5
+from foucault_bench.integrators.methods.heyoka_taylor import REFERENCE_TOLERANCE, HeyokaTaylor, HeyokaTaylorQuad, _compiled_template
+from foucault_bench.integrators.methods.scipy_ivp import ScipyDop853, ScipyLsoda, ScipyRk45
+from foucault_bench.integrators.methods.tsit5 import Tsit5
 from foucault_bench.models import MODELS, Model, PendulumParameters
 from foucault_bench.models.analytic import linear_exact, textbook_turning_azimuth
 from foucault_bench.models.parameters import P_K2, P_LENGTH

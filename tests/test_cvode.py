@@ -22,7 +22,7 @@ from foucault_bench.bench.run.matrix import load_matrix
 from foucault_bench.bench.run.runner import run_matrix
 from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.integrators import REGISTRY, Problem, get_integrator, unregister
-from foucault_bench.integrators.cvode import CvodeAdams, CvodeBdf
+from foucault_bench.integrators.methods.cvode import CvodeAdams, CvodeBdf
 from foucault_bench.integrators.cvode_library import SundialsUnavailable, load_sundials
 from foucault_bench.models import MODELS, PendulumParameters
 
@@ -129,7 +129,7 @@ PLUGIN = '''
 from typing import ClassVar
 
 from foucault_bench.integrators import register
-from foucault_bench.integrators.cvode import CvodeAdams
+from foucault_bench.integrators.methods.cvode import CvodeAdams
 
 
 @register

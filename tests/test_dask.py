@@ -164,7 +164,7 @@ def test_workers_running_other_code_are_not_used(tmp_path, dask_scheduler, capsy
     (tmp_path / f"{module_name}.py").write_text(textwrap.dedent("""
         from typing import ClassVar
         from foucault_bench.integrators import register
-        from foucault_bench.integrators.rk4 import RK4
+        from foucault_bench.integrators.methods.rk4 import RK4
 
         @register
         class ClientOnly(RK4):

@@ -110,3 +110,74 @@ def test_a_problem_hands_out_fresh_copies_of_its_vectors() -> None:
     problem.initial_state[:] = np.nan
     np.testing.assert_array_equal(problem.parameter_vector, PARIS.parameter_vector())
     np.testing.assert_array_equal(problem.initial_state, PARIS.initial_state())
+
+
+def _hand_written_rk4(acceleration):
+    """RK4's step as it was written by hand before it became tableau data (the oracle of the test below)."""
+
+    def step(x, y, vx, vy, h, p):
+        half = 0.5 * h
+        k1ax, k1ay = acceleration(x, y, vx, vy, p)
+        x2 = x + half * vx
+        y2 = y + half * vy
+        vx2 = vx + half * k1ax
+        vy2 = vy + half * k1ay
+        k2ax, k2ay = acceleration(x2, y2, vx2, vy2, p)
+        x3 = x + half * vx2
+        y3 = y + half * vy2
+        vx3 = vx + half * k2ax
+        vy3 = vy + half * k2ay
+        k3ax, k3ay = acceleration(x3, y3, vx3, vy3, p)
+        x4 = x + h * vx3
+        y4 = y + h * vy3
+        vx4 = vx + h * k3ax
+        vy4 = vy + h * k3ay
+        k4ax, k4ay = acceleration(x4, y4, vx4, vy4, p)
+        sixth = h / 6.0
+        return (
+            x + sixth * (vx + 2.0 * vx2 + 2.0 * vx3 + vx4),
+            y + sixth * (vy + 2.0 * vy2 + 2.0 * vy3 + vy4),
+            vx + sixth * (k1ax + 2.0 * k2ax + 2.0 * k3ax + k4ax),
+            vy + sixth * (k1ay + 2.0 * k2ay + 2.0 * k3ay + k4ay),
+        )
+
+    return step
+
+
+def _hand_written_explicit_euler(acceleration):
+    """Explicit Euler's step as it was written by hand before it became tableau data."""
+
+    def step(x, y, vx, vy, h, p):
+        ax, ay = acceleration(x, y, vx, vy, p)
+        return x + h * vx, y + h * vy, vx + h * ax, vy + h * ay
+
+    return step
+
+
+@pytest.mark.parametrize("model", sorted(MODELS))
+@pytest.mark.parametrize("name, hand_written", [("rk4", _hand_written_rk4),
+                                                ("explicit_euler", _hand_written_explicit_euler)])
+def test_tableau_steps_are_bitwise_the_hand_written_steps(name, hand_written, model) -> None:
+    """The tableau-generated steps of RK4 and explicit Euler (integrators.explicit_rk) give bit for bit the states
+    and streamed metrics of the hand-written steps they replaced, on every model at two step sizes."""
+    from foucault_bench.integrators.fixed_step import FixedStepIntegrator
+    from foucault_bench.models.jit import jit
+
+    tableau_driven = get_integrator(name)
+
+    class HandWritten(FixedStepIntegrator):
+        name, family, order, stages = "hand_written", "test", tableau_driven.order, tableau_driven.stages
+        stability_limit_kh, reference = None, "test oracle"
+
+        def make_step(self, model):
+            return jit(hand_written(model.numba_acceleration))
+
+    problem = Problem(MODELS[model], PARIS, np.linspace(0.0, 3 * PARIS.small_swing_period_s, 31))
+    for kh in (0.2, 0.05):
+        step_s = kh / PARIS.pendulum_frequency_rad_s
+        new, old = tableau_driven.solve(problem, step_s=step_s), HandWritten().solve(problem, step_s=step_s)
+        assert new.status == old.status and new.steps == old.steps > 0
+        assert np.array_equal(new.y, old.y, equal_nan=True)
+        assert new.streamed.energy_max_rel_error == old.streamed.energy_max_rel_error
+        assert new.streamed.energy_drift_per_s == old.streamed.energy_drift_per_s
+        assert np.array_equal(new.streamed.turning_points, old.streamed.turning_points)

@@ -1,4 +1,4 @@
-"""heyoka's compiled integrator is reused per thread (integrators.heyoka_taylor.working_integrator): a reused
+"""heyoka's compiled integrator is reused per thread (integrators.methods.heyoka_taylor.working_integrator): a reused
 integrator gives bitwise the results of a fresh copy, whatever ran on it before, with and without the event,
 and threads never share one."""
 
@@ -12,7 +12,7 @@ import pytest
 
 from foucault_bench.integrators import Problem, get_integrator
 from foucault_bench.integrators.adaptive import heyoka_tolerance
-from foucault_bench.integrators.heyoka_taylor import _compiled_template, working_integrator
+from foucault_bench.integrators.methods.heyoka_taylor import _compiled_template, working_integrator
 from foucault_bench.models import MODELS, PendulumParameters
 
 T_OUT = np.linspace(0.0, 60.0, 61)

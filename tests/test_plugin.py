@@ -62,7 +62,7 @@ from typing import ClassVar
 import numpy as np
 
 from foucault_bench.integrators import Integrator, Solution, register
-from foucault_bench.integrators.dopri5 import Dopri5
+from foucault_bench.integrators.methods.dopri5 import Dopri5
 from toy_plugin import ToyMidpoint
 
 

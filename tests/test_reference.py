@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from foucault_bench.integrators import Problem, get_integrator
-from foucault_bench.integrators.heyoka_taylor import REFERENCE_TOLERANCE
+from foucault_bench.integrators.methods.heyoka_taylor import REFERENCE_TOLERANCE
 from foucault_bench.models import MODELS, PendulumParameters
 from foucault_bench.models.analytic import linear_exact
 

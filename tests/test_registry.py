@@ -10,15 +10,19 @@ from typing import ClassVar
 import pytest
 
 import foucault_bench.integrators as integrators_package
+import foucault_bench.integrators.methods as methods_package
 from foucault_bench.integrators import REGISTRY, FixedStepIntegrator, built_in_names, is_built_in, register, unregister
-from foucault_bench.integrators.rk4 import RK4
+from foucault_bench.integrators.methods.rk4 import RK4
 
 
-def test_every_module_of_the_package_is_imported_and_its_integrators_registered() -> None:
-    modules = [info.name for info in pkgutil.iter_modules(integrators_package.__path__, "foucault_bench.integrators.")]
-    assert modules and all(name in sys.modules for name in modules)
+def test_every_method_module_is_imported_and_registers_and_the_framework_registers_nothing() -> None:
+    methods = [info.name for info in pkgutil.iter_modules(methods_package.__path__, methods_package.__name__ + ".")]
+    framework = [info.name for info in pkgutil.iter_modules(integrators_package.__path__,
+                                                            integrators_package.__name__ + ".") if not info.ispkg]
+    assert methods and all(name in sys.modules for name in methods)
     defining = {type(integrator).__module__ for name, integrator in REGISTRY.items() if is_built_in(name)}
-    assert defining <= set(modules)
+    assert defining == set(methods), "every module of integrators/methods/ registers a method, and only they do"
+    assert not defining & set(framework)
     assert {"rk4", "verlet", "cvode_bdf", "heyoka_taylor_quad"} <= set(built_in_names())
 
 

@@ -369,7 +369,7 @@ def test_concurrent_requests_compute_a_reference_once(cache, monkeypatch) -> Non
 
 def test_a_reference_that_cannot_finish_is_an_error_and_is_not_cached(cache, monkeypatch) -> None:
     from foucault_bench.integrators import Solution
-    from foucault_bench.integrators.heyoka_taylor import HeyokaTaylorQuad
+    from foucault_bench.integrators.methods.heyoka_taylor import HeyokaTaylorQuad
 
     def failing(self, problem, **kwargs):
         return Solution.failure(problem.t_out, "step limit reached")

@@ -94,3 +94,26 @@ def test_every_applied_line_of_the_command_says_whether_it_held(capsys) -> None:
         label, _, rest = line.partition("  ")
         if rest.startswith(("order on", "stable below", "diverges above")):
             assert label.strip() == "ok" and rest.count(": held") == 1, line
+
+
+def test_a_scheme_declaring_fewer_stages_than_it_evaluates_fails_the_counters() -> None:
+    """Heun's 3-stage step declared as 1 stage: the counted evaluations (integrators.counting) give nfev = 3 × steps,
+    and the counters check fails; declared as 3 stages, the same step passes."""
+    from foucault_bench.bench.gate.conformance import check_counters_and_turning_points
+    from foucault_bench.integrators import FixedStepIntegrator
+    from foucault_bench.integrators.explicit_rk import tableau_step
+    from foucault_bench.integrators.methods.heun3 import TABLEAU
+
+    class MisDeclared(FixedStepIntegrator):
+        name, family, order, stages = "heun3_declared_one_stage", "test", 3, 1
+        stability_limit_kh, reference = None, "test: Heun's third-order step declaring one stage"
+
+        def make_step(self, model):
+            return tableau_step(TABLEAU, model.numba_acceleration)
+
+    counters = check_counters_and_turning_points(MisDeclared())[0]
+    assert counters.name == "counters" and counters.holds is False
+    steps = int(counters.detail.split("× ")[-1])
+    assert counters.detail == f"nfev = {3 * steps} ≠ stages × steps = 1 × {steps}"
+    declared_three = type("DeclaredThree", (MisDeclared,), {"stages": 3})()
+    assert check_counters_and_turning_points(declared_three)[0].holds is True

@@ -55,7 +55,7 @@ def _readout_rates(app: InteractiveSimulation) -> tuple[float, float]:
 
 def _rate_tolerance(result: SimulationResult) -> float:
     """Bound (rad/s) on the measured rate's error for Verlet on the linear model. Its precession is exact
-    (integrators.verlet), so the error comes from locating the turning points: the grid interpolation
+    (integrators.methods.verlet), so the error comes from locating the turning points: the grid interpolation
     (bench.verdicts.turning_points.azimuth_error_bound) plus the O((kh)²) mismatch between Verlet's velocities and the
     model's accelerations used by the interpolant, an azimuth error ≲ (a/k)(kh)²; turned into a slope error
     by bench.verdicts.turning_points.rate_error_bound."""

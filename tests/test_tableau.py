@@ -1,5 +1,6 @@
-"""Butcher tableaux: the rooted trees behind the order conditions, the shipped tableaux, and the rejection of a
-tableau with one wrong coefficient (every coefficient of every shipped tableau, in turn)."""
+"""Butcher tableaux: the rooted trees behind the order conditions, the shipped tableaux (the embedded pairs and the
+fixed-step methods stepped from their tableau), and the rejection of a tableau with one wrong coefficient (every
+coefficient of every shipped tableau, in turn)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import pytest
 
 from foucault_bench.integrators import REGISTRY, built_in_names
 from foucault_bench.integrators.embedded_rk import EmbeddedRungeKutta
+from foucault_bench.integrators.explicit_rk import ExplicitRungeKutta
 from foucault_bench.integrators.tableau import (
     CONDITION_RTOL,
     ButcherTableau,
@@ -20,7 +22,8 @@ from foucault_bench.integrators.tableau import (
 )
 
 TABLEAUX = {name: REGISTRY[name].tableau for name in built_in_names()  # a plug-in's tableau: its selftest
-            if isinstance(REGISTRY[name], EmbeddedRungeKutta)}
+            if isinstance(REGISTRY[name], (EmbeddedRungeKutta, ExplicitRungeKutta))}
+FIXED_STEP_TABLEAUX = sorted(name for name in TABLEAUX if isinstance(REGISTRY[name], ExplicitRungeKutta))
 RELATIVE_PERTURBATION = 1.0e-6
 """A coefficient wrong in its seventh significant digit."""
 
@@ -33,10 +36,16 @@ def test_rooted_tree_counts_and_densities() -> None:
 
 
 def test_the_shipped_tableaux_are_the_expected_ones() -> None:
-    assert set(TABLEAUX) == {"dopri5", "dop853", "tsit5"}
+    assert set(TABLEAUX) == {"dopri5", "dop853", "tsit5", "explicit_euler", "heun3", "rk4"}
     facts = {name: (t.stages, t.order, t.error_order, t.error_estimator_order, t.extra_stages, t.dense_order)
-             for name, t in TABLEAUX.items()}
+             for name, t in TABLEAUX.items() if t.is_embedded}
     assert facts == {"dopri5": (6, 5, 4, 4, 0, 4), "tsit5": (6, 5, 4, 4, 0, 4), "dop853": (12, 8, 5, 7, 3, 7)}
+    plain = {name: (t.stages, t.order, t.error_order, t.dense_order, t.has_dense_output)
+             for name, t in TABLEAUX.items() if not t.is_embedded}
+    assert plain == {"explicit_euler": (1, 1, None, None, False), "heun3": (3, 3, None, None, False),
+                     "rk4": (4, 4, None, None, False)}
+    for name in FIXED_STEP_TABLEAUX:  # the declared facts are the tableau's
+        assert (REGISTRY[name].order, REGISTRY[name].stages) == (TABLEAUX[name].order, TABLEAUX[name].stages)
 
 
 @pytest.mark.parametrize("name", sorted(TABLEAUX))
@@ -75,13 +84,13 @@ def _perturbed(tableau: ButcherTableau, field: str, index: tuple) -> dict:
 def test_every_wrong_coefficient_is_rejected(name: str) -> None:
     tableau = TABLEAUX[name]
     places = _coefficient_fields(tableau)
-    assert len(places) > 20
+    assert len(places) >= 2 * tableau.stages - 1  # at least one weight and one row entry per further stage
     for field, index in places:
         with pytest.raises(ValueError, match="invalid"):
             dataclasses.replace(tableau, **_perturbed(tableau, field, index))
 
 
-@pytest.mark.parametrize("name", sorted(TABLEAUX))
+@pytest.mark.parametrize("name", sorted(name for name, t in TABLEAUX.items() if np.count_nonzero(t.b) >= 2))
 def test_a_wrong_weight_that_keeps_the_low_order_conditions_is_rejected(name: str) -> None:
     """Moving δ from one weight to another keeps Σbᵢ = 1 and the row sums: only a higher-order condition
     catches it."""
@@ -118,3 +127,34 @@ def test_imaginary_axis_stability_stated_in_the_docstrings(name: str, stable_up_
 
     assert max(amplification(y) for y in np.linspace(1e-3, stable_up_to, 2000)) <= 1.0 + 1e-13
     assert amplification(unstable_at) > 1.0 + 1e-9
+
+
+@pytest.mark.parametrize("name", FIXED_STEP_TABLEAUX)
+def test_the_declared_stability_limit_is_the_tableaus(name: str) -> None:
+    """The imaginary-axis limit computed from the coefficients, R(z) = 1 + z bᵀ(I − zA)⁻¹𝟙 (HW II, §IV.2), is the
+    declared ``stability_limit_kh`` (none: |R(iy)| > 1 for every y > 0)."""
+    tableau, declared = TABLEAUX[name], REGISTRY[name].stability_limit_kh
+    a, b, ones = np.asarray(tableau.a), np.asarray(tableau.b), np.ones(tableau.stages)
+
+    def amplification(y: float) -> float:
+        return abs(1.0 + 1j * y * b @ np.linalg.solve(np.eye(tableau.stages) - 1j * y * a, ones))
+
+    if declared is None:
+        assert all(amplification(y) > 1.0 for y in np.linspace(1e-3, 10.0, 2000))
+        return
+    assert max(amplification(y) for y in np.linspace(1e-3, declared * (1 - 1e-6), 2000)) <= 1.0 + 1e-13
+    assert amplification(declared * (1 + 1e-4)) > 1.0 + 1e-12
+
+
+def test_error_weights_and_dense_output_are_optional_but_complete() -> None:
+    rk4 = TABLEAUX["rk4"]
+    with pytest.raises(ValueError, match="error_weights and error_order together"):
+        dataclasses.replace(rk4, error_order=3)
+    with pytest.raises(ValueError, match="dense_weights or as dense_hairer, with dense_order"):
+        dataclasses.replace(rk4, dense_order=3)
+    with pytest.raises(ValueError, match="order condition"):  # a plain tableau's order is checked as a pair's
+        dataclasses.replace(rk4, order=5)
+    with pytest.raises(ValueError, match="order condition"):
+        dataclasses.replace(TABLEAUX["heun3"], b=(0.25, 0.25, 0.5))  # Σb = 1 and row sums hold: order 1 only
+    with pytest.raises(TypeError, match="needs a tableau with error weights"):
+        type("PlainPair", (EmbeddedRungeKutta,), {"name": "plain_pair", "tableau": rk4, "reference": "test"})

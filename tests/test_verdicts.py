@@ -87,7 +87,7 @@ HEYOKA_EVENT_TIME_TOLERANCE_S = 1e-10
 
 
 def test_grid_turning_points_agree_with_heyoka_event_turning_points() -> None:
-    # an independent measurement: heyoka's event r·ṙ = 0 located on its own dense output (integrators.heyoka_taylor)
+    # an independent measurement: heyoka's event r·ṙ = 0 located on its own dense output (integrators.methods.heyoka_taylor)
     scene = shortened(SCENES["lab_3m"], 360.0)
     solution = get_integrator("heyoka_taylor").solve(scene.problem(), tol=1e-15, monitor=True)
     events = solution.streamed.turning_points

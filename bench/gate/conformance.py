@@ -23,7 +23,9 @@ whether the suite will treat the method correctly. Every check returns a ``Check
    at 0.99 × the limit does not grow over as many more (beyond ``ROUND_OFF_GROWTH``), and a run at 1.01 × the
    limit is ``diverged``.
 3. **counters**: a short run on the linear model is ``ok`` and reports ``steps`` and the step size (fixed
-   step) or the tolerance (adaptive), and ``nfev`` > 0, equal to ``stages × steps`` when ``stages`` is declared.
+   step) or the tolerance (adaptive), and ``nfev`` > 0, equal to ``stages × steps`` when ``stages`` is declared
+   (a fixed-step scheme's ``nfev`` is its counted evaluations, ``integrators.counting``: a scheme that evaluates
+   the right-hand side more or less often than it declares fails here).
    A fixed-step method that declares no ``stages`` (evaluations vary per step) may report no ``nfev``.
 4. **turning points**: where the run streams the radius maxima (``Solution.streamed``, optional: the verdicts
    find turning points on the output grid), two per swing period, t = 0 not counted: 8 over

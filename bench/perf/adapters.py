@@ -33,7 +33,7 @@ from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio
 from foucault_bench.bench.problems.scenes import SCENES
 from foucault_bench.integrators import get_integrator
 from foucault_bench.integrators.adaptive import absolute_tolerance, heyoka_tolerance, step_budget
-from foucault_bench.integrators.cvode import CvodeAdams, CvodeBdf
+from foucault_bench.integrators.methods.cvode import CvodeAdams, CvodeBdf
 
 SECTION = "adapters"
 TARGET = 1.05

@@ -4,7 +4,8 @@
  * models/base.py): every expression keeps the operand order of its Python twin, including the multiplications
  * by the zero velocities and zero rotation components that the one-source models carry, so that a C loop and
  * the numba kernel compute the same states (bitwise: neither contracts a*b+c into an FMA). The schemes
- * (integrators/{explicit_euler,symplectic_euler,rk4,verlet,yoshida4,composition6,boris,gauss}.py) and the loop
+ * (integrators/methods/{explicit_euler,symplectic_euler,rk4,heun3,verlet,yoshida4,composition6,boris}.py,
+ * integrators/explicit_rk.py, integrators/gauss.py) and the loop
  * (integrators/fixed_step.py) are written as a C programmer writes them for speed:
  *   - every loop invariant computed once before the loop (make_consts, <scheme>_setup): the parameters read
  *     into local scalars, sqrt(k2) for the Gauss solves, the Boris rotation's cosine and sine, and for the
@@ -18,7 +19,7 @@
  *   - four scalar doubles of state, two nested loops (output rows, steps per row: no modulo per step), the
  *     divergence test after every step, the state written to `out` once per row;
  *   - sqrt, not pow(x, 0.5).
- * The numba steps compute the same way (integrators/verlet.py verlet_sequence), so the states stay bitwise equal.
+ * The numba steps compute the same way (integrators/methods/verlet.py verlet_sequence), so the states stay bitwise equal.
  *
  * Each (model, scheme) pair exports two functions:
  *   fb_<model>_<scheme>(state0, p, h, n_steps, stride, out, radius_bound, steps_done) -> status
@@ -36,7 +37,7 @@
 typedef struct {
     double g, length, k2, wx, wy, wz, c;  /* models/parameters.py PARAMETER_VECTOR_NAMES */
     double k;                             /* sqrt(k2): the Gauss solves' norm */
-    /* Verlet sequences (integrators/verlet.py verlet_sequence): sub-steps gamma_i h and the merged rotations */
+    /* Verlet sequences (integrators/methods/verlet.py verlet_sequence): sub-steps gamma_i h and the merged rotations */
     double sub_h[MAX_SUB_STEPS];
     double cos_r[MAX_SUB_STEPS + 1], sin_r[MAX_SUB_STEPS + 1]; /* plane: rotation by -c_i a h about z */
     double rot[MAX_SUB_STEPS + 1][9];                          /* sphere: rotation by -c_i |w| h, row-major */
@@ -54,7 +55,7 @@ static consts make_consts(const double *p) {
 
 static void no_setup(consts *k, double h) { (void)k; (void)h; }
 
-/* integrators/verlet.py _rotation: R = cos a I + sin a [n]x + (1 - cos a) n n^T, a = -|w| c h */
+/* integrators/methods/verlet.py _rotation: R = cos a I + sin a [n]x + (1 - cos a) n n^T, a = -|w| c h */
 static void rotation_matrix(const consts *k, double c, double h, double *r) {
     double rate = sqrt(k->wx * k->wx + k->wy * k->wy + k->wz * k->wz);
     if (rate == 0.0) {
@@ -70,7 +71,7 @@ static void rotation_matrix(const consts *k, double c, double h, double *r) {
     r[6] = u * nz * nx - sin_a * ny; r[7] = u * nz * ny + sin_a * nx; r[8] = cos_a + u * nz * nz;
 }
 
-/* integrators/verlet.py rotation_coefficients: c_0 = g_1/2, c_i = (g_i + g_(i+1))/2, c_n = g_n/2 */
+/* integrators/methods/verlet.py rotation_coefficients: c_0 = g_1/2, c_i = (g_i + g_(i+1))/2, c_n = g_n/2 */
 static void sequence_setup(consts *k, double h, const double *gamma, int n) {
     for (int i = 0; i < n; i++) k->sub_h[i] = gamma[i] * h;
     for (int i = 0; i <= n; i++) {
@@ -84,7 +85,7 @@ static void sequence_setup(consts *k, double h, const double *gamma, int n) {
 
 /* integrators/composition.py triple_jump(4): g_1 = g_3 = 1/(2 - 2^(1/3)), g_2 = 1 - 2 g_1 (as Python rounds them) */
 static const double YOSHIDA4[3] = {1.3512071919596578, -1.7024143839193155, 1.3512071919596578};
-/* integrators/composition6.py: Kahan & Li s9odr6a */
+/* integrators/methods/composition6.py: Kahan & Li s9odr6a */
 static const double COMPOSITION6[9] = {
     0.39216144400731413927925056, 0.33259913678935943859974864, -0.70624617255763935980996482,
     0.08221359629355080023149045, 0.79854399093482996339895035, 0.08221359629355080023149045,
@@ -101,6 +102,7 @@ static void boris_setup(consts *k, double h) {
 #define explicit_euler_setup no_setup
 #define symplectic_euler_setup no_setup
 #define rk4_setup no_setup
+#define heun3_setup no_setup
 #define implicit_midpoint_setup no_setup
 #define gauss_legendre4_setup no_setup
 
@@ -214,11 +216,27 @@ DEFINE_KICK(spherical, k->wx, k->wy)
         *py = y + sixth * (vy + 2.0 * vy2 + 2.0 * vy3 + vy4);                                                 \
         *pvx = vx + sixth * (k1ax + 2.0 * k2ax + 2.0 * k3ax + k4ax);                                          \
         *pvy = vy + sixth * (k1ay + 2.0 * k2ay + 2.0 * k3ay + k4ay);                                          \
+    }                                                                                                         \
+    /* integrators/methods/heun3.py as integrators/explicit_rk.py generates it: rows (h/D)(integer sums) */    \
+    static inline void model##_heun3_step(const consts *k, double h, double *px, double *py, double *pvx,    \
+                                          double *pvy) {                                                     \
+        double x = *px, y = *py, vx = *pvx, vy = *pvy, third = h / 3.0, quarter = h / 4.0;                    \
+        double k1ax, k1ay, k2ax, k2ay, k3ax, k3ay;                                                            \
+        model##_acceleration(k, x, y, vx, vy, &k1ax, &k1ay);                                                  \
+        double x2 = x + third * vx, y2 = y + third * vy, vx2 = vx + third * k1ax, vy2 = vy + third * k1ay;    \
+        model##_acceleration(k, x2, y2, vx2, vy2, &k2ax, &k2ay);                                              \
+        double x3 = x + third * (2.0 * vx2), y3 = y + third * (2.0 * vy2);                                    \
+        double vx3 = vx + third * (2.0 * k2ax), vy3 = vy + third * (2.0 * k2ay);                              \
+        model##_acceleration(k, x3, y3, vx3, vy3, &k3ax, &k3ay);                                              \
+        *px = x + quarter * (vx + 3.0 * vx3);                                                                 \
+        *py = y + quarter * (vy + 3.0 * vy3);                                                                 \
+        *pvx = vx + quarter * (k1ax + 3.0 * k3ax);                                                            \
+        *pvy = vy + quarter * (k1ay + 3.0 * k3ay);                                                            \
     }
 DEFINE_RUNGE_KUTTA_STEPS(linear)
 DEFINE_RUNGE_KUTTA_STEPS(spherical)
 
-/* ---- Verlet sequences (integrators/verlet.py verlet_sequence): Verlet, yoshida4, composition6 ---- */
+/* ---- Verlet sequences (integrators/methods/verlet.py verlet_sequence): Verlet, yoshida4, composition6 ---- */
 
 /* plane: canonical p = v + a z x r; per sub-step the merged rotation then kick, drift, kick */
 static inline void linear_sequence(const consts *k, int n, double *x_, double *y_, double *vx_, double *vy_) {
@@ -314,7 +332,7 @@ static inline void spherical_sequence(const consts *k, int n, double *x_, double
 DEFINE_SEQUENCE_STEPS(linear)
 DEFINE_SEQUENCE_STEPS(spherical)
 
-/* ---- Boris (integrators/boris.py): drift, half kick, Coriolis rotation of v, half kick, drift ---- */
+/* ---- Boris (integrators/methods/boris.py): drift, half kick, Coriolis rotation of v, half kick, drift ---- */
 
 static inline void linear_boris_step(const consts *k, double h, double *x_, double *y_, double *vx_,
                                      double *vy_) {
@@ -334,7 +352,7 @@ static inline void linear_boris_step(const consts *k, double h, double *x_, doub
     *vy_ = vy;
 }
 
-/* integrators/boris.py _geodesic: a great circle at constant speed for a time tau */
+/* integrators/methods/boris.py _geodesic: a great circle at constant speed for a time tau */
 static inline void geodesic(double *x, double *y, double *z, double *vx, double *vy, double *vz, double length,
                             double tau) {
     double speed = sqrt(*vx * *vx + *vy * *vy + *vz * *vz);
@@ -586,6 +604,7 @@ static void turning_point(double x0, double y0, double vx0, double vy0, double x
 DEFINE_LOOPS(linear, explicit_euler)
 DEFINE_LOOPS(linear, symplectic_euler)
 DEFINE_LOOPS(linear, rk4)
+DEFINE_LOOPS(linear, heun3)
 DEFINE_LOOPS(linear, verlet)
 DEFINE_LOOPS(linear, yoshida4)
 DEFINE_LOOPS(linear, composition6)
@@ -595,6 +614,7 @@ DEFINE_LOOPS(linear, gauss_legendre4)
 DEFINE_LOOPS(spherical, explicit_euler)
 DEFINE_LOOPS(spherical, symplectic_euler)
 DEFINE_LOOPS(spherical, rk4)
+DEFINE_LOOPS(spherical, heun3)
 DEFINE_LOOPS(spherical, verlet)
 DEFINE_LOOPS(spherical, yoshida4)
 DEFINE_LOOPS(spherical, composition6)

@@ -40,7 +40,7 @@ def compile_probe(integrator_name: str, model_names: list[str]) -> dict:
     import numpy as np
 
     from foucault_bench.integrators import Problem, get_integrator
-    from foucault_bench.integrators.heyoka_taylor import REFERENCE_TOLERANCE
+    from foucault_bench.integrators.methods.heyoka_taylor import REFERENCE_TOLERANCE
     from foucault_bench.models import MODELS
 
     import_s = time.perf_counter() - started

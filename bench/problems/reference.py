@@ -1,7 +1,7 @@
 """Reference solutions: each scene integrated once in quadruple precision and kept in a disk cache.
 
 The reference is heyoka's Taylor integrator in IEEE binary128 (``heyoka_taylor_quad`` at
-``integrators.heyoka_taylor.REFERENCE_TOLERANCE`` = 1e-33; integrators/README.md "Adaptive methods": an
+``integrators.methods.heyoka_taylor.REFERENCE_TOLERANCE`` = 1e-33; integrators/README.md "Adaptive methods": an
 independent reference far below any double-precision error), run on the scene's own output grid, so every
 integrator of the scene is compared with it point for point. Its state is rounded to float64 once, at the output.
 
@@ -37,7 +37,7 @@ from foucault_bench.bench.problems.scene_key import physics_identity
 from foucault_bench.bench.problems.scenes import Scene
 from foucault_bench.bench.run.provenance import PACKAGE_ROOT, source_digest
 from foucault_bench.integrators import STATUS_OK, get_integrator
-from foucault_bench.integrators.heyoka_taylor import REFERENCE_TOLERANCE
+from foucault_bench.integrators.methods.heyoka_taylor import REFERENCE_TOLERANCE
 
 REFERENCE_INTEGRATOR = "heyoka_taylor_quad"
 CACHE_ENVIRONMENT_VARIABLE = "FOUCAULT_BENCH_CACHE"

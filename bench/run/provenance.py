@@ -30,8 +30,8 @@ from typing import Any, Iterable
 PACKAGE_ROOT = Path(__file__).resolve().parents[2]
 """The folder holding ``bench/``, ``models/``, ``integrators/``: the repository in a checkout or an editable
 install, ``site-packages/foucault_bench`` in a wheel install."""
-NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "bench/problems/scene.py", "bench/problems/scene_reader.py",
-                  "bench/problems/scenes.py", "bench/scenes/*.toml", "bench/problems/reference.py",
+NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "integrators/methods/*.py", "bench/problems/*.py",
+                  "bench/scenes/*.toml",
                   "bench/verdicts/*.py", "bench/run/runner.py", "bench/run/timing.py")
 """Source files (relative to ``PACKAGE_ROOT``) whose contents are part of every run key."""
 PROVENANCE_PACKAGES = ("numpy", "scipy", "numba", "heyoka", "scikit-sundae", "pandas", "distributed")

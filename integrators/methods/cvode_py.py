@@ -1,7 +1,7 @@
 """SUNDIALS CVODE through scikit-sundae's Python interface (``cvode_adams_py``, ``cvode_bdf_py``): what a
 Python user of scikit-sundae gets.
 
-The same solves as ``cvode_adams`` / ``cvode_bdf`` (``integrators.cvode``: same SUNDIALS build, same
+The same solves as ``cvode_adams`` / ``cvode_bdf`` (``integrators.methods.cvode``: same SUNDIALS build, same
 ``CvodeIntegrator.settings``: method, maximum order, tolerances, step limit, Newton iteration with the dense
 linear solver, stop time), driven by ``sksundae.cvode.CVODE``: CVODE calls back into Python for every
 right-hand-side evaluation (a closure around ``Model.numba_rhs_into``, since scikit-sundae 1.2 cannot take an
@@ -9,7 +9,7 @@ array as ``userdata``: its option check evaluates the array's truth value) and e
 (``Model.numba_jacobian_into``, the compiled path's Jacobian), and loops over the output times in its own
 code. Both paths take the same steps and return bitwise-equal states (tests/test_cvode.py); the cost
 differs by the binding's work per callback, so ``cost_basis = "python-driven"``. Tolerance mapping, order
-and stability: as ``integrators.cvode``.
+and stability: as ``integrators.methods.cvode``.
 
 Counters: ``nfev`` and ``njev`` from scikit-sundae's result (with ``analytic_jacobian=False``, ``nfev`` adds
 the 4 right-hand-side calls of each difference-quotient Jacobian, as the compiled path does). ``steps`` and
@@ -24,7 +24,7 @@ from typing import ClassVar
 import numpy as np
 
 from foucault_bench.integrators.base import STATUS_FAILED, Problem, Solution
-from foucault_bench.integrators.cvode import CvodeAdams, CvodeBdf, CvodeIntegrator
+from foucault_bench.integrators.methods.cvode import CvodeAdams, CvodeBdf, CvodeIntegrator
 from foucault_bench.integrators.registry import register
 
 STATE_SIZE = 4

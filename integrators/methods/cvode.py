@@ -29,7 +29,7 @@ scikit-sundae uses, so that ``cvode_*`` and ``cvode_*_py`` run the same algorith
   error test; steps retried after a corrector convergence failure are in ``extra``).
 * **Cost basis.** ``cost_basis = "compiled"``: no Python runs during a solve (the output loop is numba code,
   the callbacks are C functions), so the time is CVODE's own. ``cvode_adams_py`` / ``cvode_bdf_py``
-  (``integrators.cvode_py``) are the same solves driven by scikit-sundae with Python callbacks.
+  (``integrators.methods.cvode_py``) are the same solves driven by scikit-sundae with Python callbacks.
 
 SUNDIALS prints warnings and errors on stderr; ``Integrator.solve`` silences the process's descriptors while
 it runs. If the SUNDIALS libraries cannot be loaded the run is a ``failed`` row whose message names what is

@@ -18,7 +18,7 @@ Verlet's limit; the rotation is an isometry of the velocity).
 **Planar models** (linear, the seed's eqs.): the Coriolis vector is the vertical a ẑ, the rotation turns
 (ẋ, ẏ) clockwise by 2ah. A velocity-dependent force that is not Coriolis (the seed's eqs. 4-5, ``Model.numba_remainder``)
 is added to the half kicks, explicitly in the first and implicitly (two fixed-point sweeps) in the second, as in
-``integrators.verlet``.
+``integrators.methods.verlet``.
 
 **Sphere**: every flow is constrained to |r| = L. The drift is the exact geodesic flow (a great circle at
 constant speed); the kick adds the tangential part of F(r); the rotation turns v about the local vertical

@@ -1,7 +1,7 @@
 """Sixth-order composition of the rotating-frame Verlet step: Kahan and Li's nine-stage method s9odr6a.
 
 Φ_h = V_{γ₉h} ∘ … ∘ V_{γ₁h} with the symmetric weights below, V the rotating-frame Verlet step
-(``integrators.verlet``): symplectic, symmetric, order 6, 9 Verlet steps (18 force evaluations) per step.
+(``integrators.methods.verlet``): symplectic, symmetric, order 6, 9 Verlet steps (18 force evaluations) per step.
 Kahan and Li chose the weights to minimise the leading error term; they beat Yoshida's seven-stage sixth-order
 solution at equal cost (Kahan & Li, Math. Comp. 66, 1089 (1997); weights as printed in Hairer, Lubich & Wanner,
 Geometric Numerical Integration, 2nd ed., §V.3.2, eq. (3.12)).

@@ -1,0 +1,115 @@
+"""Fixed-step explicit Runge-Kutta methods from their Butcher tableau: one compiled step per tableau.
+
+A subclass of ``ExplicitRungeKutta`` declares a ``ButcherTableau`` (``integrators.tableau``, validated against its
+order conditions when it is built); ``order`` and ``stages`` follow from it. The step is generated from the
+coefficients and compiled by numba: straight-line code over scalars, one acceleration call per stage, no array
+and no loop over the tableau at run time, so the fixed-step loop (``integrators.fixed_step``) runs it as fast as
+the hand-written steps it replaces (bench/PERF.md).
+
+For a second-order system y = (q, v), f(y) = (v, a(q, v)), stage i of an explicit method is
+Qᵢ = q + h Σⱼ aᵢⱼ Vⱼ, Vᵢ = v + h Σⱼ aᵢⱼ A(Qⱼ, Vⱼ) with V₁ = v, and the step is q + h Σᵢ bᵢ Vᵢ,
+v + h Σᵢ bᵢ A(Qᵢ, Vᵢ) (Hairer, Nørsett & Wanner, Solving ODEs I, §II.1, eq. (1.8)).
+
+Operation order: a row whose coefficients are fractions with a small common denominator D (every classical
+method's) is computed as (h / D) · (n₁k₁ + n₂k₂ + …) with integer numerators, summed left to right, and terms with
+a zero coefficient left out; other rows as h · (a₁k₁ + a₂k₂ + …). For explicit Euler and RK4 this is, operation for
+operation, the arithmetic of the hand-written steps they had (multiplications by 1, 2 and ½ are exact), so their
+results are bitwise the same (tests/test_fixed_step.py).
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+from typing import Callable, ClassVar
+
+from foucault_bench.integrators.fixed_step import FixedStepIntegrator
+from foucault_bench.integrators.tableau import ButcherTableau
+from foucault_bench.models import Model
+from foucault_bench.models.jit import jit
+
+MAX_DENOMINATOR = 10_000
+"""Largest common denominator of a row written as (h / D) · (integer combination); larger ones use the floats."""
+
+
+def rational_row(coefficients: tuple[float, ...]) -> tuple[int, tuple[float, ...]]:
+    """(D, numerators) with coefficients = numerators / D exactly in double precision, D ≤ ``MAX_DENOMINATOR``;
+    (1, coefficients) when there is no such D."""
+    fractions = [Fraction(value).limit_denominator(MAX_DENOMINATOR) for value in coefficients]
+    if any(float(fraction) != value for fraction, value in zip(fractions, coefficients, strict=True)):
+        return 1, tuple(coefficients)
+    denominator = math.lcm(*(fraction.denominator for fraction in fractions)) if fractions else 1
+    if denominator > MAX_DENOMINATOR:
+        return 1, tuple(coefficients)
+    return denominator, tuple(float(fraction * denominator) for fraction in fractions)
+
+
+def _combination(base: str, terms: list[str], coefficients: tuple[float, ...]) -> str:
+    """Source of ``base`` + h Σⱼ coefficientsⱼ · termsⱼ in the operation order of the module docstring."""
+    denominator, weights = rational_row(coefficients)
+    products = [term if weight == 1.0 else f"{weight!r} * {term}"
+                for term, weight in zip(terms, weights, strict=True) if weight != 0.0]
+    if not products:
+        return base
+    scale = "h" if denominator == 1 else f"(h / {float(denominator)!r})"
+    single_term = len(products) == 1 and " " not in products[0]
+    total = products[0] if single_term else f"({' + '.join(products)})"
+    return f"{base} + {scale} * {total}"
+
+
+def step_source(tableau: ButcherTableau) -> str:
+    """Python source of ``make(acceleration)``, returning the tableau's step ``(x, y, vx, vy, h, p) -> state``."""
+    a = tableau.a
+    lines = ["def make(acceleration):", "    def step(x, y, vx, vy, h, p):"]
+    velocity_x: list[str] = ["vx"]
+    velocity_y: list[str] = ["vy"]
+    accel_x: list[str] = []
+    accel_y: list[str] = []
+    for i in range(tableau.stages):
+        if i > 0:
+            row = tuple(float(value) for value in a[i][:i])
+            for name, base, terms in ((f"x{i}", "x", velocity_x), (f"y{i}", "y", velocity_y),
+                                      (f"vx{i}", "vx", accel_x), (f"vy{i}", "vy", accel_y)):
+                lines.append(f"        {name} = {_combination(base, terms, row)}")
+            velocity_x.append(f"vx{i}")
+            velocity_y.append(f"vy{i}")
+            arguments = f"x{i}, y{i}, vx{i}, vy{i}"
+        else:
+            arguments = "x, y, vx, vy"
+        lines.append(f"        ax{i}, ay{i} = acceleration({arguments}, p)")
+        accel_x.append(f"ax{i}")
+        accel_y.append(f"ay{i}")
+    weights = tuple(float(value) for value in tableau.b)
+    updated = [_combination(base, terms, weights) for base, terms in
+               (("x", velocity_x), ("y", velocity_y), ("vx", accel_x), ("vy", accel_y))]
+    lines += [f"        return {', '.join(updated)}", "    return step"]
+    return "\n".join(lines) + "\n"
+
+
+def tableau_step(tableau: ButcherTableau, acceleration: Callable) -> Callable:
+    """The compiled step of ``tableau`` around the model's ``acceleration(x, y, vx, vy, p) -> (ax, ay)``.
+
+    The source is compiled under this file's name, so that numba's disk cache (``models.jit``) can locate it; its
+    key covers the generated bytecode and constants, hence the coefficients."""
+    namespace: dict[str, object] = {"__name__": __name__}
+    exec(compile(step_source(tableau), __file__, "exec"), namespace)  # noqa: S102 - source generated above
+    make = namespace["make"]
+    assert callable(make)
+    return jit(make(acceleration))
+
+
+class ExplicitRungeKutta(FixedStepIntegrator):
+    """Base of the fixed-step explicit Runge-Kutta methods: a subclass declares ``tableau`` (``order`` and
+    ``stages`` follow from it), ``name``, ``stability_limit_kh`` and ``reference``."""
+
+    tableau: ClassVar[ButcherTableau]
+    family: ClassVar[str] = "runge-kutta"
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        if "tableau" in cls.__dict__:
+            cls.order = cls.tableau.order
+            cls.stages = cls.tableau.stages
+
+    def make_step(self, model: Model) -> Callable:
+        return tableau_step(self.tableau, model.numba_acceleration)
