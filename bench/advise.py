@@ -209,7 +209,7 @@ def _ranked(rows: pd.DataFrame, target: Target) -> list[pd.Series]:
 # the model
 # --------------------------------------------------------------------------------------------------------------
 def model_advice(adequacy: pd.DataFrame, scene: Scene, target: Target) -> dict[str, Any]:
-    """Which model the scene needs at the target, from its model-adequacy rows (``bench.problems.adequacy``):
+    """Which model the scene needs at the target, from its model-adequacy rows (``bench.verdicts.adequacy``):
     the precession-rate difference for a precession target, the trajectory gap otherwise, compared with the
     target."""
     quantity, unit = (("precession_rate_diff", "Ω_E|sin φ|") if target.metric.startswith("precession")
@@ -288,7 +288,7 @@ def advise(store: ResultsStore, scene: Scene, target: Target, *, search_jobs: in
         best = _run_record(runs.loc[usable["error"].idxmin()], target.metric, cost)
     notes = same_name_notes(store.frame(all_runs=True), scene)
     if not runs.empty:
-        from foucault_bench.bench.run.provenance import code_version
+        from foucault_bench.bench.provenance import code_version
 
         stale = runs["code_version"].notna() & (runs["code_version"] != code_version())
         if stale.any():

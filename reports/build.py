@@ -477,7 +477,7 @@ def _adequacy(builder: _Builder, adequacy: pd.DataFrame) -> None:
         return
     builder.add(Paragraph(
         "Per scene, what each simpler model gets wrong compared with the scene's model "
-        "(bench.problems.adequacy.model_adequacy)."))
+        "(bench.verdicts.adequacy.model_adequacy)."))
     builder.curves("model_adequacy",
                    "Model adequacy per scene (log scale). Left panel, 'Precession rate missed': how far the simpler "
                    "model's precession rate is from the richer one's, in units of Ω_E|sin φ|. Right panel, 'Path "

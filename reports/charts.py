@@ -577,7 +577,7 @@ def release_azimuth(table: pd.DataFrame) -> Figure:
 
 
 def adequacy(table: pd.DataFrame) -> Figure:
-    """Per scene, what each simpler model gets wrong against the richer one (``bench.problems.adequacy``): |precession
+    """Per scene, what each simpler model gets wrong against the richer one (``bench.verdicts.adequacy``): |precession
     rate difference| in units of Ω_E|sin φ| and trajectory gap in units of A, measured (filled) next to the
     leading-order expectation (hollow) where the physics gives one; dot plot on log axes."""
     rows = table.reset_index(drop=True)

@@ -11,7 +11,7 @@ plane's expected direction at the end, ψ₀ − ω sin φ · t (models/README.m
 through the centre.
 Sliders set Earth's rate (in multiples of the sidereal Ω_E, so that the precession shows within a few
 swings), the latitude, the string length and the amplitude. The readout gives the precession rate measured on
-the numeric solution's turning points (``bench.verdicts.turning_points.turning_points_from_grid`` and ``precession_rate``,
+the numeric solution's turning points (``bench.problems.turning_points.turning_points_from_grid`` and ``precession_rate``,
 the procedure of the results table) against the textbook −ω sin φ, in degrees per hour, counter-clockwise
 positive, and, for the spherical model, against Airy's finite-amplitude rate −ω sin φ (1 − (3/8)θ₀²).
 
@@ -44,7 +44,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
+from foucault_bench.bench.problems.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
 from foucault_bench.integrators import STATUS_OK, Problem, get_integrator
 from foucault_bench.integrators.registry import REGISTRY
 from foucault_bench.models import PendulumParameters, get_model

@@ -37,7 +37,7 @@ from foucault_bench.bench.problems.scenes import SEED_EARTH_RATE_RAD_S
 from foucault_bench.bench.schema import setting_label
 from foucault_bench.bench.verdicts.columns import energy_scale, energy_verdicts, released_from_rest
 from foucault_bench.bench.verdicts.stability import measured_stability_limit, spectral_growth, step_matrix
-from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
+from foucault_bench.bench.problems.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
 from foucault_bench.integrators import (
     STATUS_DIVERGED,
     STATUS_OK,
@@ -317,7 +317,7 @@ def precession_vs_latitude(config: PrecessionLatitudeConfig = PrecessionLatitude
 
     One ``heyoka.taylor_adaptive_batch`` carries all latitudes (batch element i has the parameter vector of
     latitude i); a non-terminal event on r·ṙ = 0 crossing downwards (a maximum of the radius) records each
-    turning point from heyoka's dense output, and ``bench.verdicts.turning_points.precession_rate`` fits the rate
+    turning point from heyoka's dense output, and ``bench.problems.turning_points.precession_rate`` fits the rate
     (integrators/README.md "Measuring the precession rate"). Events at t = 0 (release from rest) are dropped, as in the
     fixed-step turning-point detector.
 
@@ -398,7 +398,7 @@ class ReleaseAzimuthConfig:
 
 def grid_precession_rate(model: Model, params: PendulumParameters, solution: Solution) -> float:
     """The swing-plane rate (rad/s) measured from ``solution``'s output grid by the suite's one procedure
-    (``bench.verdicts.turning_points``); NaN unless the run is ok."""
+    (``bench.problems.turning_points``); NaN unless the run is ok."""
     if solution.status != STATUS_OK:
         return math.nan
     points = turning_points_from_grid(solution.t, solution.y, grid_accelerations(model, params, solution.y),

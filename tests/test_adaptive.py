@@ -10,7 +10,7 @@ measurements behind them (this machine, tol = 1e-10 unless said):
 * error ≤ 1e4 × tol at tol = 1e-10: the tolerance bounds the local error per step, the global error adds up over
   the steps (largest measured 1.7e3 × tol, cvode_bdf on the linear model: a margin of 5.9);
 * turning points, located on the output grid by the suite's one procedure
-  (``bench.verdicts.turning_points.turning_points_from_grid``) for the solution and for the reference alike:
+  (``bench.problems.turning_points.turning_points_from_grid``) for the solution and for the reference alike:
   times within (10 × error + 1e-13)/k and positions within (10 × error + 1e-13)·A of the reference's; measured
   ≤ 1.0 × error where the error is above round-off, and ≤ 2e-14 where it is not (1e-13: double round-off of a
   turning time near t = 100 s, k·t·ε ≈ 1e-14, with a margin of 10). Against the exact linear solution the
@@ -28,7 +28,7 @@ import pytest
 
 from foucault_bench.integrators import REGISTRY, Problem, Solution, built_in_names, get_integrator
 from foucault_bench.integrators.adaptive import state_scale
-from foucault_bench.bench.verdicts.turning_points import (
+from foucault_bench.bench.problems.turning_points import (
     azimuth_error_bound,
     grid_accelerations,
     turning_points_from_grid,

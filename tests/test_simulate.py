@@ -19,7 +19,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.verdicts.turning_points import azimuth_error_bound, rate_error_bound
+from foucault_bench.bench.problems.turning_points import azimuth_error_bound, rate_error_bound
 from foucault_bench.reports.simulate import (
     DEGREES_PER_HOUR_PER_RAD_S,
     VIEW_BOUND,
@@ -56,9 +56,9 @@ def _readout_rates(app: InteractiveSimulation) -> tuple[float, float]:
 def _rate_tolerance(result: SimulationResult) -> float:
     """Bound (rad/s) on the measured rate's error for Verlet on the linear model. Its precession is exact
     (integrators.verlet), so the error comes from locating the turning points: the grid interpolation
-    (bench.verdicts.turning_points.azimuth_error_bound) plus the O((kh)²) mismatch between Verlet's velocities and the
+    (bench.problems.turning_points.azimuth_error_bound) plus the O((kh)²) mismatch between Verlet's velocities and the
     model's accelerations used by the interpolant, an azimuth error ≲ (a/k)(kh)²; turned into a slope error
-    by bench.verdicts.turning_points.rate_error_bound."""
+    by bench.problems.turning_points.rate_error_bound."""
     params = result.settings.params()
     a_over_k = abs(params.vertical_rate_rad_s) / params.pendulum_frequency_rad_s
     azimuth = azimuth_error_bound(params, result.t_s[1] - result.t_s[0]) + a_over_k * result.settings.setting**2

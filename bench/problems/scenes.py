@@ -11,7 +11,7 @@ How the built-in scenes were chosen:
   < spherical) that resolves the precession rate to the precision its source quotes it. The linear model neglects
   the Airy precession (3/8)θ₀² (θ₀ = A/L), the release-side term ≈ ¼θ₀³cot φ and the centrifugal anisotropy; a
   scene is linear when these stay well below the rounding of the quoted rate, spherical otherwise. Each scene's
-  ``why_model`` gives its numbers; ``bench.problems.adequacy`` measures what the other models would change.
+  ``why_model`` gives its numbers; ``bench.verdicts.adequacy`` measures what the other models would change.
 * **Amplitude.** Not well sourced for any real pendulum (models/README.md "Real pendulums"): each scene states
   the amplitude it assumes, a swing of θ₀ ≈ 0.045-0.05 rad unless the scene is about large swings.
 * **Duration.** Cost grows with the number of swings, so each real scene lasts 200-520 small-swing periods
@@ -44,7 +44,7 @@ if TYPE_CHECKING:
 
 MIN_OUTPUT_INTERVALS_PER_PERIOD = 5.0
 """The output interval must be at most 1/5 of the small-swing period: turning points are located on the grid
-(``bench.verdicts.turning_points.turning_points_from_grid``), which needs samples on both sides of each radius maximum
+(``bench.problems.turning_points.turning_points_from_grid``), which needs samples on both sides of each radius maximum
 (strictly less than a quarter period; a fifth leaves a margin for the longer period of large swings)."""
 
 MAX_OUTPUT_POINTS = 2_000_000
@@ -131,7 +131,7 @@ def scene_name_problem(name: Any, max_length: int | None = MAX_SCENE_NAME_LENGTH
     """Why ``name`` cannot name a scene, or ``None``: its characters (``SCENE_NAME_PATTERN``, every scene) and
     its length (``max_length``; ``bench.run.matrix`` holds every scene a matrix runs to
     ``MAX_SCENE_NAME_LENGTH``, while a scene made inside a computation, such as the model variants
-    ``NAME.spherical`` of ``bench.problems.adequacy``, names no file and may be longer)."""
+    ``NAME.spherical`` of ``bench.verdicts.adequacy``, names no file and may be longer)."""
     if not isinstance(name, str) or not SCENE_NAME_PATTERN.fullmatch(name):
         return f"scene name {short_repr(name)} may hold only letters, digits, '_', '.' and '-'"
     if max_length is not None and len(name) > max_length:
@@ -146,7 +146,7 @@ def physical_limit_problems(params: PendulumParameters) -> list[str]:
     * **Earth's rate below the pendulum's frequency**, Ω < k = √(g/L). The rotating-frame models describe a swing
       whose plane Earth turns slowly: by π Ω sin φ / k per swing. At Ω ≥ k that is up to half a turn or more per
       swing, so there is no swing plane whose turning points the precession measurement could follow
-      (``bench.verdicts.turning_points``), and the terms of relative size (Ω/k)² that the planar models drop
+      (``bench.problems.turning_points``), and the terms of relative size (Ω/k)² that the planar models drop
       (models/README.md "The three models") are of order one. Earth's Ω_E/k is 10⁻⁵-10⁻⁴ for real pendulums.
     * **The bob stays below the pivot's height.** The spherical model's coordinates end there (z = −√(L² − x²
       − y²), ``models.spherical``), a string can go slack above it, and the planar models approximate the
@@ -360,7 +360,7 @@ def _linear_why(theta0: float, quoted: str, quoted_rounding: float, latitude_deg
         f"The linear model (seed eqs. 6-7) turns the plane at exactly −Ω_E sin φ; what it leaves out at θ₀ = "
         f"{theta0:.4f} is the Airy precession (3/8)θ₀² = {airy:.1e}, the release-side term ≲ ¼θ₀³cot φ = "
         f"{release_side:.0e} and the centrifugal anisotropy (≈ (Ω_E/k)² = {(SIDEREAL_EARTH_RATE_RAD_S / k) ** 2:.1e}), "
-        f"all below the quoted rounding, so the spherical model would not change the figure the scene is about (bench.problems.adequacy "
+        f"all below the quoted rounding, so the spherical model would not change the figure the scene is about (bench.verdicts.adequacy "
         f"reports the trajectory it does change: the finite-amplitude period)."
     )
 

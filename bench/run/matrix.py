@@ -56,7 +56,7 @@ from typing import Any
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR, physics_identity
 from foucault_bench.bench.problems.scenes import SCENES, Scene, scene_from_mapping, scene_name_problem
-from foucault_bench.bench.run.provenance import code_version, digest
+from foucault_bench.bench.provenance import code_version, digest
 from foucault_bench.bench.run.timing import TimingPolicy
 from foucault_bench.bench.schema import declared_facts, setting_label
 from foucault_bench.bench.validation import (

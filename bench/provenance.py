@@ -27,10 +27,11 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any, Iterable
 
-PACKAGE_ROOT = Path(__file__).resolve().parents[2]
+PACKAGE_ROOT = Path(__file__).resolve().parents[1]
 """The folder holding ``bench/``, ``models/``, ``integrators/``: the repository in a checkout or an editable
 install, ``site-packages/foucault_bench`` in a wheel install."""
 NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "bench/problems/scenes.py", "bench/problems/reference.py",
+                  "bench/problems/turning_points.py",
                   "bench/verdicts/*.py", "bench/run/runner.py", "bench/run/timing.py")
 """Source files (relative to ``PACKAGE_ROOT``) whose contents are part of every run key."""
 PROVENANCE_PACKAGES = ("numpy", "scipy", "numba", "heyoka", "scikit-sundae", "pandas", "distributed")
