@@ -1,5 +1,5 @@
 """The report's charts: each function reads plain DataFrames (results rows or study tables) and writes one
-figure as PNG and SVG. Nothing here computes a result; ``reports.studies`` and ``reports.tables`` do.
+figure as PNG and SVG. Nothing here computes a result; ``bench.studies`` and ``reports.tables`` do.
 
 Conventions shared by every chart:
 

@@ -24,8 +24,8 @@ exact solution and the turning points are drawn on top of the trail.
 ``--save`` writes an animation of the same view instead (no display needed): GIF with Pillow, MP4 with ffmpeg
 (a clear error when ffmpeg is not installed). Its path is checked before anything is computed
 (``save_path_problems``) and the file is written whole or not at all (a temporary file renamed over it), with at
-most ``MAX_FRAMES`` frames at up to ``MAX_FPS`` frames per second. The computation (``simulate``) is separate from the drawing
-(``SimulationView``), so both are testable headless.
+most ``MAX_FRAMES`` frames at up to ``MAX_FPS`` frames per second. The computation is ``bench.simulation.simulate``;
+this module draws its result (``SimulationView``), so both are testable headless.
 """
 
 from __future__ import annotations
@@ -44,20 +44,13 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.problems.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
-from foucault_bench.integrators import STATUS_OK, Problem, get_integrator
+from foucault_bench.integrators import STATUS_OK
 from foucault_bench.integrators.registry import REGISTRY
-from foucault_bench.models import PendulumParameters, get_model
-from foucault_bench.models.analytic import linear_exact
 from foucault_bench.reports.charts import integrator_style
-from foucault_bench.reports.simulation_settings import SimulationSettings
+from foucault_bench.bench.simulation import SimulationResult, simulate
+from foucault_bench.bench.simulation_settings import SimulationSettings
 
 DEGREES_PER_HOUR_PER_RAD_S = math.degrees(1.0) * 3600.0
-OUTPUT_POINTS_PER_PERIOD = 16
-"""Output grid density: 16 points per small-swing period (turning points need fewer than a quarter period
-between samples, ``bench.verdicts``; the extra density draws the swing smoothly)."""
-MAX_OUTPUT_POINTS = 400_000
-"""Largest output grid the command accepts (the view redraws it on every slider move)."""
 MAX_FRAMES = 200
 """Most frames a saved animation may have: 10 s at the default 20 fps. Pillow keeps every frame of a GIF in
 memory until it writes the file (matplotlib's ``PillowWriter``): 200 frames of 800 × 480 pixels peaked at
@@ -82,64 +75,12 @@ TEXT_WRAP_CHARS = 46
 """Width (characters) at which messages in the figure are wrapped, so that they stay inside it."""
 
 
-@dataclass
-class SimulationResult:
-    """Numeric and analytic paths on one grid, turning points, measured and expected rates (rad/s)."""
-
-    settings: SimulationSettings
-    t_s: np.ndarray
-    numeric: np.ndarray
-    analytic: np.ndarray
-    turning_points: np.ndarray
-    measured_rate_rad_s: float
-    measured_rate_stderr_rad_s: float
-    expected_rate_rad_s: float
-    status: str
-    message: str
-    airy_rate_rad_s: float | None = None
-    """Airy's finite-amplitude rate for the spherical model (``PendulumParameters.airy_precession_rate_rad_s``),
-    ``None`` for the planar models."""
-
-    @property
-    def plane_rate_rad_s(self) -> float:
-        """The rate the expected swing plane turns at: Airy's for the spherical model, −ω sin φ otherwise."""
-        return self.expected_rate_rad_s if self.airy_rate_rad_s is None else self.airy_rate_rad_s
-
-    def drawn_until(self) -> int:
-        """Number of output points drawn: up to (not including) the first one that is not finite or lies beyond
-        ``VIEW_BOUND`` amplitudes from the centre."""
-        reach = np.hypot(self.numeric[:, 0], self.numeric[:, 1])
-        outside = ~(reach <= VIEW_BOUND * self.settings.amplitude_m)
-        return int(np.argmax(outside)) if outside.any() else len(self.t_s)
-
-
-def output_intervals(settings: SimulationSettings, params: PendulumParameters) -> int:
-    """Intervals of the output grid over ``settings.hours``: ``OUTPUT_POINTS_PER_PERIOD`` per small-swing
-    period of ``params`` (``settings.params()``), at least one."""
-    return max(1, math.ceil(OUTPUT_POINTS_PER_PERIOD * settings.hours * 3600.0 / params.small_swing_period_s))
-
-
-def simulate(settings: SimulationSettings) -> SimulationResult:
-    """Integrate the settings' model with its integrator and measure the precession (``ValueError`` for
-    parameters the model refuses, e.g. an amplitude not below the length)."""
-    params = settings.params()
-    duration = settings.hours * 3600.0
-    t = np.linspace(0.0, duration, output_intervals(settings, params) + 1)
-    model = get_model(settings.model)
-    integrator = get_integrator(settings.integrator)
-    problem = Problem(model=model, params=params, t_out=t)
-    if integrator.adaptive:
-        solution = integrator.solve(problem, tol=settings.setting)
-    else:
-        solution = integrator.solve(problem, step_s=settings.setting / params.pendulum_frequency_rad_s)
-    points = turning_points_from_grid(t, solution.y, grid_accelerations(model, params, solution.y),
-                                      include_release=True)
-    rate, stderr = precession_rate(points) if solution.status == STATUS_OK else (math.nan, math.nan)
-    return SimulationResult(settings=settings, t_s=t, numeric=solution.y, analytic=linear_exact(params, t),
-                            turning_points=points, measured_rate_rad_s=rate, measured_rate_stderr_rad_s=stderr,
-                            expected_rate_rad_s=params.textbook_precession_rate_rad_s, status=solution.status,
-                            message=solution.message,
-                            airy_rate_rad_s=params.airy_precession_rate_rad_s if settings.model == "spherical" else None)
+def drawn_until(result: SimulationResult) -> int:
+    """Number of output points drawn: up to (not including) the first one that is not finite or lies beyond
+    ``VIEW_BOUND`` amplitudes from the centre."""
+    reach = np.hypot(result.numeric[:, 0], result.numeric[:, 1])
+    outside = ~(reach <= VIEW_BOUND * result.settings.amplitude_m)
+    return int(np.argmax(outside)) if outside.any() else len(result.t_s)
 
 
 def map_view(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -259,7 +200,7 @@ def notice_text(result: SimulationResult) -> str:
     if result.status != STATUS_OK:
         message = result.message if result.message.startswith(result.status) else f"{result.status}: {result.message}"
         lines += _wrap(f"{result.settings.integrator} run {message}")
-    drawn = result.drawn_until()
+    drawn = drawn_until(result)
     if drawn < len(result.t_s):
         lines += _wrap(f"the path leaves {VIEW_BOUND:g} A from the centre at t = {result.t_s[drawn]:.4g} s: "
                        "not drawn after that")
@@ -336,7 +277,7 @@ class SimulationView:
         result = self.result
         assert result is not None
         stop = index + 1
-        shown = min(stop, result.drawn_until())
+        shown = min(stop, drawn_until(result))
         edges = np.linspace(0, max(shown - 1, 0), TRAIL_SEGMENTS + 1).round().astype(int)
         for piece, line in enumerate(self.trail):
             first, last = edges[piece], edges[piece + 1] + 1 if shown else 0

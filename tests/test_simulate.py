@@ -20,14 +20,15 @@ from matplotlib.figure import Figure
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.turning_points import azimuth_error_bound, rate_error_bound
+from foucault_bench.bench.simulation import SimulationResult
+from foucault_bench.bench.simulation_settings import SimulationSettings
 from foucault_bench.reports.simulate import (
     DEGREES_PER_HOUR_PER_RAD_S,
     VIEW_BOUND,
     WINDOW_TITLE,
     InteractiveSimulation,
-    SimulationResult,
-    SimulationSettings,
     SimulationView,
+    drawn_until,
     format_setting,
     open_window,
     save_animation,
@@ -238,7 +239,7 @@ def test_a_diverging_run_stays_in_view_and_says_when_it_diverged() -> None:
     view.update(settings)
     result = view.result
     assert result.status == "diverged"
-    drawn = result.drawn_until()
+    drawn = drawn_until(result)
     reach = np.hypot(result.numeric[:, 0], result.numeric[:, 1])
     assert 0 < drawn < len(result.t_s) and reach[drawn] > VIEW_BOUND * settings.amplitude_m
     east, north = view.drawn_path()

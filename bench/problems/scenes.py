@@ -515,7 +515,7 @@ def _builtin_scenes() -> dict[str, Scene]:
                         f"in the seed, which makes the North-South drift x (x points South) reach ≈ 3 mm in 2 min (the "
                         f"seed: 'del orden de milímetros'); sidereal Ω_E would be {SIDEREAL_EARTH_RATE_RAD_S:.7e} "
                         "rad/s. The command `foucault-bench seed`, which redraws the note's own figures, assumes "
-                        "L = 10 m at 45° instead (reports.studies.SeedConfig): there its "
+                        "L = 10 m at 45° instead (bench.studies.SeedConfig): there its "
                         "Euler run's failure shows within the 2 minutes; this scene puts the note's question on a "
                         "documented pendulum, like every other scene, and the drift scale y₀ω t cos λ is the same "
                         "3 mm in both.",
