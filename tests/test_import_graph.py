@@ -243,3 +243,37 @@ def test_a_planted_sub_package_cycle_is_found(planted_graph) -> None:
     assert import_cycles(bench_part_graph(planted_graph)) == [
         "foucault_bench.bench.problems ↔ foucault_bench.bench.run ↔ foucault_bench.bench.verdicts"]
     assert "foucault_bench.bench.problems.scenes" not in " ".join(import_cycles(planted_graph))
+
+
+INTEGRATING_NAMES = frozenset({"get_integrator", "solve", "Problem", "step_matrix"})
+"""Names whose use means integrating: looking an integrator up to run it, running it, posing its problem, or
+building its one-step map (``bench.verdicts.stability``)."""
+
+
+def integrating_uses(path: Path, root: Path = ROOT) -> list[str]:
+    """Where the module at ``path`` uses a name of ``INTEGRATING_NAMES`` (as a name, an attribute or an import)."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))):
+        name = (node.id if isinstance(node, ast.Name) else node.attr if isinstance(node, ast.Attribute)
+                else None)
+        if isinstance(node, ast.alias):
+            name = node.asname or node.name.rpartition(".")[2]
+        if name in INTEGRATING_NAMES:
+            found.append(f"{path.relative_to(root)}:{getattr(node, 'lineno', '?')} {name}")
+    return found
+
+
+def test_reports_only_draw_and_write() -> None:
+    """The computing lives in ``bench`` (``bench.studies``, ``bench.simulation``): no module of ``reports`` runs
+    an integrator itself."""
+    uses = [use for path in sorted((ROOT / "reports").rglob("*.py")) for use in integrating_uses(path)]
+    assert not uses, "reports/ integrates: " + "; ".join(uses)
+
+
+def test_a_planted_integration_in_reports_is_found(tmp_path) -> None:
+    planted = tmp_path / "reports" / "draw.py"
+    planted.parent.mkdir()
+    planted.write_text("from foucault_bench.integrators import get_integrator\n"
+                       "def draw(problem):\n    return get_integrator('rk4').solve(problem, step_s=0.1)\n")
+    uses = [use.rpartition(" ")[2] for use in integrating_uses(planted, tmp_path)]
+    assert sorted(uses) == ["get_integrator", "get_integrator", "solve"]

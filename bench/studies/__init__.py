@@ -12,6 +12,7 @@ motion or an integrator.
 
 from foucault_bench.bench.studies.common import (
     family_representatives, relative_energy_error, solve_with_setting, structure_preserving_integrators,
+    study_setting_label,
 )
 from foucault_bench.bench.studies.energy import (
     BOUNDED_BELOW_EXPONENT, GROWING_ABOVE_EXPONENT, LongTimeEnergyConfig, energy_trends, long_time_energy,
@@ -30,5 +31,5 @@ __all__ = [
     "StabilitySweepConfig", "Study", "centrifugal_check", "energy_trends", "ensure_studies",
     "family_representatives", "long_time_energy", "midpoint_precession_law", "precession_vs_latitude",
     "precession_vs_release_azimuth", "relative_energy_error", "seed_revisited", "solve_with_setting",
-    "stability_sweep", "stored_version", "structure_preserving_integrators",
+    "stability_sweep", "stored_version", "structure_preserving_integrators", "study_setting_label",
 ]
