@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR
 from foucault_bench.bench.verdicts.columns import released_from_rest
 from foucault_bench.bench.problems.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
 from foucault_bench.integrators import (
@@ -117,7 +116,7 @@ class ReleaseAzimuthConfig:
     output_interval_s: float = 0.45
     kh: float = 0.1
     integrators: tuple[str, ...] = field(default_factory=structure_preserving_integrators)
-    reference_integrator: str = REFERENCE_INTEGRATOR
+    reference_integrator: str = "heyoka_taylor"
     reference_tol: float = 1e-15
 
 
