@@ -14,7 +14,7 @@ from foucault_bench.bench.problems.scenes import SCENES
 from foucault_bench.bench.problems.turning_points import rate_measurement_floor
 
 THRESHOLDS = Path(__file__).resolve().parents[1] / "bench" / "thresholds" / "default.toml"
-FLOOR_CITED = re.compile(r"floor ([0-9.]+e-?[0-9]+) on this scene, bench\.verdicts\.turning_points\.rate_measurement_floor")
+FLOOR_CITED = re.compile(r"floor ([0-9.]+e-?[0-9]+) on this scene, bench\.problems\.turning_points\.rate_measurement_floor")
 
 
 def bounds_citing_the_floor() -> list[dict]:
