@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.turning_points import azimuth_error_bound, rate_error_bound
 from foucault_bench.bench.simulation import SimulationResult
+from foucault_bench.reports.animation import save_animation
 from foucault_bench.bench.simulation_settings import SimulationSettings
 from foucault_bench.reports.simulate import (
     DEGREES_PER_HOUR_PER_RAD_S,
@@ -31,7 +32,6 @@ from foucault_bench.reports.simulate import (
     drawn_until,
     format_setting,
     open_window,
-    save_animation,
 )
 from foucault_bench.bench.commands.simulate import add_arguments, settings_from_args
 
