@@ -277,3 +277,19 @@ def test_a_planted_integration_in_reports_is_found(tmp_path) -> None:
                        "def draw(problem):\n    return get_integrator('rk4').solve(problem, step_s=0.1)\n")
     uses = [use.rpartition(" ")[2] for use in integrating_uses(planted, tmp_path)]
     assert sorted(uses) == ["get_integrator", "get_integrator", "solve"]
+
+
+def test_perf_stands_apart_from_the_run_path() -> None:
+    """``bench.perf`` measures the suite from outside: only the command line imports it, and it uses the run
+    path's public names only (no ``_private`` import from ``bench.run``)."""
+    perf = "foucault_bench.bench.perf"
+    importers = sorted(importer for importer, imports in import_graph().items()
+                       if not (importer == perf or importer.startswith(perf + ".")) and layer(importer) < COMMAND_LINE_LAYER
+                       and any(imported == perf or imported.startswith(perf + ".") for imported in imports))
+    assert not importers, f"outside the command line, {importers} import bench.perf"
+    private = [f"{name}: {node.module}.{alias.name}" for name, path in source_modules(ROOT).items()
+               if name.startswith(perf + ".") or name == perf
+               for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+               if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("foucault_bench.bench.run")
+               for alias in node.names if alias.name.startswith("_")]
+    assert not private, private
