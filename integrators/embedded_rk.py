@@ -459,10 +459,11 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
         super().__init_subclass__(**kwargs)
         if "tableau" in cls.__dict__:
             cls.order = cls.tableau.order
-        if cls.__dict__.get("steps_of") is not None:
-            problems = scipy_twin_problems(cls.tableau, cls.steps_of)
+        twin = cls.__dict__.get("steps_of")
+        if twin is not None:
+            problems = scipy_twin_problems(cls.tableau, twin)
             if problems:
-                raise TypeError(f"{cls.__name__}.steps_of = {cls.steps_of.__name__}: " + "; ".join(problems))
+                raise TypeError(f"{cls.__name__}.steps_of = {twin.__name__}: " + "; ".join(problems))
 
     def __init__(self, max_steps: int | None = None) -> None:
         if max_steps is not None and max_steps < 1:
