@@ -198,7 +198,7 @@ def replacing_folder(path: str | Path, option: str, command: str) -> Iterator[Pa
 
 
 def _marker_content(command: str) -> dict[str, str]:
-    from foucault_bench.bench.run.provenance import package_version
+    from foucault_bench.bench.provenance import package_version
 
     return {"written_by": "foucault-bench", "command": command, "version": package_version(),
             "written_utc": datetime.now(timezone.utc).isoformat(timespec="seconds")}

@@ -19,7 +19,11 @@ How to add an integrator (integrators/README.md "Adding an integrator" has a wor
    ``bench/matrices/quick.toml`` (``tests/test_matrix.py`` fails until every built-in family is swept by
    them), and give it bounds (``[[bound]]`` entries with their basis) in ``bench/thresholds/default.toml``:
    ``foucault-bench check`` judges the quick matrix that CI runs against those bounds, and an integrator
-   without one is judged by nothing.
+   without one is judged by nothing (``check`` names it).
+7. A built-in only: the documents the tests hold to the registry: a row in integrators/README.md "The
+   integrators" with the declared family, order, stages and stability limit, and the default matrix's
+   counts in README.md ("The main job is … runs (N integrators × …"; ``tests/test_docs.py``); an adaptive
+   method's docstrings name its order, stability and tolerance mapping (``tests/test_adaptive.py``).
 
 The framework then
 

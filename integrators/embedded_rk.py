@@ -36,13 +36,14 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Callable, ClassVar, cast
+from typing import Any, Callable, ClassVar, cast
 
 import numpy as np
 from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 from numba.np.unsafe.ndarray import to_fixed_tuple
+from scipy.integrate import OdeSolver
 
 from foucault_bench.integrators.adaptive import AdaptiveIntegrator, absolute_tolerance, step_budget, turning_points
 from foucault_bench.integrators.base import STATUS_FAILED, Problem, Solution, StreamedMetrics
@@ -422,6 +423,22 @@ def compiled_driver(model: Model, tableau: ButcherTableau) -> Callable:
                         tableau.error_estimator_order)
 
 
+def scipy_twin_problems(tableau: ButcherTableau, solver: Any) -> list[str]:
+    """How ``tableau`` differs from scipy's ``solver`` (none when it is scipy's pair): stage count, orders, and
+    the nodes, coefficients and weights c, A, b to within a few units of round-off."""
+    problems = [f"{what} {mine} against scipy's {theirs}" for what, mine, theirs in (
+        ("stages", tableau.stages, solver.n_stages), ("order", tableau.order, solver.order),
+        ("error estimator order", tableau.error_estimator_order, solver.error_estimator_order)) if mine != theirs]
+    if problems:
+        return problems
+    a = np.asarray(tableau.a, dtype=np.float64).reshape(tableau.stages, tableau.stages)[:, : solver.A.shape[1]]
+    for what, mine, theirs in (("c", np.asarray(tableau.c), solver.C), ("A", a, solver.A),
+                               ("b", np.asarray(tableau.b), solver.B)):
+        if not np.allclose(mine, theirs, rtol=0.0, atol=4 * np.finfo(np.float64).eps):
+            problems.append(f"{what} differs from scipy's")
+    return problems
+
+
 class EmbeddedRungeKutta(AdaptiveIntegrator):
     """Base of the compiled embedded Runge-Kutta integrators: a subclass declares ``tableau`` (its ``order``
     follows from it) and the usual facts.
@@ -433,6 +450,10 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
     tableau: ClassVar[ButcherTableau]
     family: ClassVar[str] = "runge-kutta"
     cost_basis: ClassVar[str] = "compiled"
+    steps_of: ClassVar[type[OdeSolver] | None] = None
+    """scipy's ``RungeKutta`` solver whose steps this integrator takes (same tableau, error norm, controller and
+    initial step: the tests compare them step for step with the registered integrator of that solver), or
+    None. Checked when the class is made (``scipy_twin_problems``)."""
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
@@ -442,6 +463,11 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
                                 f"dense output ({cls.tableau.name!r} has {'no error weights' if not cls.tableau.is_embedded else 'no dense output'}; "
                                 "a plain tableau is stepped by integrators.explicit_rk.ExplicitRungeKutta)")
             cls.order = cls.tableau.order
+        twin = cls.__dict__.get("steps_of")
+        if twin is not None:
+            problems = scipy_twin_problems(cls.tableau, twin)
+            if problems:
+                raise TypeError(f"{cls.__name__}.steps_of = {twin.__name__}: " + "; ".join(problems))
 
     def __init__(self, max_steps: int | None = None) -> None:
         if max_steps is not None and max_steps < 1:
@@ -468,3 +494,16 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
             solution.streamed = StreamedMetrics(turning_points=turning_points(
                 problem, events[:n_events, 0], events[:n_events, 1], events[:n_events, 2]))
         return solution
+
+
+def scipy_twins() -> dict[str, str]:
+    """Registered compiled pair → the registered scipy integrator whose solver it takes the steps of
+    (``EmbeddedRungeKutta.steps_of`` against ``ScipyIvpIntegrator.solver_class``), in name order; a pair whose
+    solver no registered integrator drives is left out."""
+    from foucault_bench.integrators.registry import REGISTRY
+
+    by_solver = {solver: name for name, integrator in REGISTRY.items()
+                 if (solver := getattr(integrator, "solver_class", None)) is not None}
+    return {name: by_solver[integrator.steps_of] for name, integrator in sorted(REGISTRY.items())
+            if isinstance(integrator, EmbeddedRungeKutta) and integrator.steps_of in by_solver}
+

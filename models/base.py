@@ -39,7 +39,7 @@ namespaces.
 **Extension points** (models/README.md "Adding a model"): a model is one module of this package with a
 module-level ``MODEL = Model(...)``; ``models`` discovers it (no list to edit). ``refines`` declares which
 simpler models it adds physics to, which places it in the adequacy hierarchy (``adequacy_hierarchy``,
-read by ``bench.problems.adequacy``). heyoka is handed its parameter values by ``Model.heyoka_parameters``.
+read by ``bench.verdicts.adequacy``). heyoka is handed its parameter values by ``Model.heyoka_parameters``.
 """
 
 from __future__ import annotations
@@ -131,7 +131,7 @@ class Model:
             (``with_example_parameters``), so that a refinement is never checked only where it equals its parents.
         adds_parameters: the fields that switch on all the physics this model adds to the models it refines:
             at their defaults it equals them (``equals_parents_at``), and the adequacy study then compares it with
-            none of them (``bench.problems.adequacy``). ``()`` (the default): the model differs from its parents
+            none of them (``bench.verdicts.adequacy``). ``()`` (the default): the model differs from its parents
             at every parameter value. Each must appear in ``example_parameters``.
     """
 

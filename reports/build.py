@@ -9,7 +9,7 @@ The folder opens in a browser with no server and no network: index.html and REPO
 ``figures/`` (``reports.charts``, matplotlib, for papers; REPORT.md shows these). Tables are embedded and
 written under ``tables/`` as CSV, Markdown, LaTeX and HTML. The summary answers which integrator and setting
 is cheapest per scene at each target error (``--targets``, default 1e-3 1e-6 1e-9), with the Pareto fronts of
-every error metric (``bench.verdicts.pareto``). File names made from scene names go through ``file_stem``. The study tables (``reports.studies``) are read from the database
+every error metric (``bench.verdicts.pareto``). File names made from scene names go through ``file_stem``. The study tables (``bench.studies``) are read from the database
 and computed (then stored) when missing, or recomputed with ``--studies recompute``; ``--studies skip`` leaves
 their sections out. The seed note's figures (``reports.seed``) are a section of the report.
 
@@ -55,7 +55,7 @@ from foucault_bench.reports.document import (
     write_table_files,
 )
 from foucault_bench.reports.seed import seed_blocks
-from foucault_bench.reports.studies import STUDIES, ensure_studies
+from foucault_bench.bench.studies import STUDIES, ensure_studies
 from matplotlib.figure import Figure as MplFigure
 from tqdm import tqdm
 
@@ -72,7 +72,7 @@ class ReportInputs:
 
     Attributes:
         runs: results rows (columns of ``bench.schema``).
-        studies: study name (``reports.studies.STUDIES``) → its table; missing names leave their section out.
+        studies: study name (``bench.studies.STUDIES``) → its table; missing names leave their section out.
         adequacy: rows of the ``adequacy`` table (scene, model, simpler_model, precession_rate_diff,
             trajectory_gap, note), possibly empty.
         provenance: label → value lines shown at the top (matrix id, host, commit, ...).
@@ -316,7 +316,7 @@ def _convergence(builder: _Builder, runs: pd.DataFrame) -> None:
 
 
 def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
-    from foucault_bench.reports.studies import (
+    from foucault_bench.bench.studies import (
         BOUNDED_BELOW_EXPONENT,
         GROWING_ABOVE_EXPONENT,
         energy_trends,
@@ -341,7 +341,7 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
                 for name in family_representatives().values()}:
             which = ("one representative per integrator family, each family's simplest built-in member by the "
                      "facts it declares (fixed-step before adaptive, then the lowest order, then compiled code; "
-                     "reports.studies.family_representatives), the fixed-step ones at "
+                     "bench.studies.family_representatives), the fixed-step ones at "
                      f"kh = {first['config_kh']:g} and the adaptive ones at tol = {first['config_tol']:g}")
         else:
             which = f"{len(trends)} configured runs"
@@ -363,7 +363,7 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
                                f"{run.max_error:.2g} by {end} (p = {round(run.exponent, 2) + 0.0:.2f})")
         builder.add(Heading("Long-time energy"), Paragraph(
             f"Relative energy error (E − E₀)/E_swing against time over {end}, {which} (study "
-            "`study_long_time_energy`, reports.studies.long_time_energy). "
+            "`study_long_time_energy`, bench.studies.long_time_energy). "
             f"Values below {charts.LOG_FLOOR:g} (exact zeros included) are drawn at {charts.LOG_FLOOR:g}."),
             Paragraph(
             f"What the runs show, with M(t) the largest |error| up to t and its trend the exponent p of "
@@ -477,7 +477,7 @@ def _adequacy(builder: _Builder, adequacy: pd.DataFrame) -> None:
         return
     builder.add(Paragraph(
         "Per scene, what each simpler model gets wrong compared with the scene's model "
-        "(bench.problems.adequacy.model_adequacy)."))
+        "(bench.verdicts.adequacy.model_adequacy)."))
     builder.curves("model_adequacy",
                    "Model adequacy per scene (log scale). Left panel, 'Precession rate missed': how far the simpler "
                    "model's precession rate is from the richer one's, in units of Ω_E|sin φ|. Right panel, 'Path "

@@ -1,5 +1,5 @@
 """The report's charts: each function reads plain DataFrames (results rows or study tables) and writes one
-figure as PNG and SVG. Nothing here computes a result; ``reports.studies`` and ``reports.tables`` do.
+figure as PNG and SVG. Nothing here computes a result; ``bench.studies`` and ``reports.tables`` do.
 
 Conventions shared by every chart:
 
@@ -22,14 +22,15 @@ the backend an interactive session uses; saving renders with Agg.
 
 from __future__ import annotations
 
+import colorsys
 import math
-import zlib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 import pandas as pd
+from matplotlib import colors
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
@@ -40,16 +41,13 @@ from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
 from foucault_bench.integrators.registry import REGISTRY
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
 
-FAMILY_COLOURS: dict[str, str] = {
-    "euler": "#d62728",
-    "runge-kutta": "#1f77b4",
-    "verlet": "#2ca02c",
-    "multistep": "#9467bd",
-    "taylor": "#ff7f0e",
-}
-"""Fixed colours of the known families; other families get one of ``SPARE_COLOURS`` by a stable hash."""
-
-SPARE_COLOURS = ("#8c564b", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f", "#393b79", "#637939")
+FAMILY_PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#bcbd22",
+                  "#17becf")
+"""The qualitative palette the families take in turn: matplotlib's ``tab10`` without its grey (grey is for
+curves that are no integrator's, e.g. the Pareto envelope and the seed's analytic curves)."""
+EXTENSION_LIGHTNESS = 0.42
+EXTENSION_SATURATION = 0.75
+"""Past the palette, families take evenly spaced hues at this HSL lightness and saturation."""
 INTEGRATOR_MARKERS = ("o", "s", "D", "v", "P", "*", "h", "<", ">", "p")
 FIXED_STEP_LINESTYLES = ("-", "-.", (0, (1, 1)))
 """Solid family: fixed-step sweeps; the second and third integrator of a family get dash-dot and dotted."""
@@ -65,10 +63,21 @@ LOG_FLOOR = 1e-17
 # --------------------------------------------------------------------------------------------------------------
 # styles
 # --------------------------------------------------------------------------------------------------------------
+def family_colours(families: Sequence[str]) -> dict[str, str]:
+    """A distinct colour for each of ``families`` (distinct names), in their order: ``FAMILY_PALETTE`` first,
+    then evenly spaced HSL hues (offset by half a step)."""
+    extra = max(0, len(families) - len(FAMILY_PALETTE))
+    extension = [colors.to_hex(colorsys.hls_to_rgb((index + 0.5) / extra, EXTENSION_LIGHTNESS,
+                                                   EXTENSION_SATURATION)) for index in range(extra)]
+    return dict(zip(families, (*FAMILY_PALETTE, *extension)[: len(families)], strict=True))
+
+
 def family_colour(family: str) -> str:
-    if family in FAMILY_COLOURS:
-        return FAMILY_COLOURS[family]
-    return SPARE_COLOURS[zlib.crc32(family.encode()) % len(SPARE_COLOURS)]
+    """The colour of ``family``: ``family_colours`` of the registered families in sorted order, so that no two
+    registered families share one, plug-ins' included. A family no registered integrator has (rows of a
+    removed plug-in) comes after them, so it shares no registered family's colour either."""
+    registered = sorted({item.family for item in REGISTRY.values()})
+    return family_colours(registered if family in registered else [*registered, family])[family]
 
 
 def integrator_style(integrator: str, family: str, adaptive: bool | None = None) -> dict:
@@ -577,7 +586,7 @@ def release_azimuth(table: pd.DataFrame) -> Figure:
 
 
 def adequacy(table: pd.DataFrame) -> Figure:
-    """Per scene, what each simpler model gets wrong against the richer one (``bench.problems.adequacy``): |precession
+    """Per scene, what each simpler model gets wrong against the richer one (``bench.verdicts.adequacy``): |precession
     rate difference| in units of Ω_E|sin φ| and trajectory gap in units of A, measured (filled) next to the
     leading-order expectation (hollow) where the physics gives one; dot plot on log axes."""
     rows = table.reset_index(drop=True)

@@ -6,7 +6,7 @@ The seed note (Spanish; summarised in reports/README.md "The seed note") shows f
 of its approximate analytic solution (eqs. 14-15, ω = 2π/24 h), its Euler solution of eqs. 4-5, that solution's
 relative energy error, and the numeric-minus-analytic difference. Each is redrawn here as the seed made it (with
 stated assumptions where the note gives no numbers) beside a corrected figure, and followed by one paragraph
-saying which claim holds and which does not, with numbers. The computations are ``reports.studies.seed_revisited``
+saying which claim holds and which does not, with numbers. The computations are ``bench.studies.seed_revisited``
 (the suite's integrators and ``models.analytic``); this module only plots and writes. ``seed_blocks`` is also the
 report's section.
 """
@@ -19,7 +19,7 @@ import numpy as np
 from matplotlib.figure import Figure as MplFigure
 
 from foucault_bench.bench.atomic import replacing_folder
-from foucault_bench.reports.studies import SeedStudy, seed_revisited
+from foucault_bench.bench.studies import SeedStudy, seed_revisited
 from foucault_bench.reports.charts import integrator_style, save
 from foucault_bench.reports.interactive import drawn_points, from_matplotlib
 from foucault_bench.reports.document import Block, Figure, Heading, Paragraph, write_document
@@ -238,7 +238,7 @@ def seed_blocks(folder: Path, prefix: str) -> list[Block]:
             f"latitude {c.latitude_deg:g}° (the seed's colatitude λ = {90 - c.latitude_deg:g}°), release from rest "
             f"at y = y₀, explicit Euler with h = {c.euler_step_s * 1e3:g} ms, and RK4 with h = "
             f"{c.reference_step_s * 1e3:g} ms on the same equations as their reference. Each figure: left, as the "
-            "seed made it; right, corrected. Computed by reports.studies.seed_revisited with the suite's integrators "
+            "seed made it; right, corrected. Computed by bench.studies.seed_revisited with the suite's integrators "
             "and models.analytic."),
     ]
     for name, draw, caption in (

@@ -11,7 +11,7 @@ plane's expected direction at the end, ψ₀ − ω sin φ · t (models/README.m
 through the centre.
 Sliders set Earth's rate (in multiples of the sidereal Ω_E, so that the precession shows within a few
 swings), the latitude, the string length and the amplitude. The readout gives the precession rate measured on
-the numeric solution's turning points (``bench.verdicts.turning_points.turning_points_from_grid`` and ``precession_rate``,
+the numeric solution's turning points (``bench.problems.turning_points.turning_points_from_grid`` and ``precession_rate``,
 the procedure of the results table) against the textbook −ω sin φ, in degrees per hour, counter-clockwise
 positive, and, for the spherical model, against Airy's finite-amplitude rate −ω sin φ (1 − (3/8)θ₀²).
 
@@ -21,11 +21,9 @@ precision. The view stays on the swing: a path that leaves ``VIEW_BOUND`` amplit
 stops being drawn there, and the figure says when it left and when the run diverged. Old swings fade, and the
 exact solution and the turning points are drawn on top of the trail.
 
-``--save`` writes an animation of the same view instead (no display needed): GIF with Pillow, MP4 with ffmpeg
-(a clear error when ffmpeg is not installed). Its path is checked before anything is computed
-(``save_path_problems``) and the file is written whole or not at all (a temporary file renamed over it), with at
-most ``MAX_FRAMES`` frames at up to ``MAX_FPS`` frames per second. The computation (``simulate``) is separate from the drawing
-(``SimulationView``), so both are testable headless.
+``--save`` writes an animation of the same view instead (no display needed; ``reports.animation``). The
+computation is ``bench.simulation.simulate``; this module draws its result (``SimulationView``), so both are
+testable headless.
 """
 
 from __future__ import annotations
@@ -33,44 +31,21 @@ from __future__ import annotations
 import functools
 import math
 import os
-import subprocess
 import textwrap
-import uuid
 from dataclasses import dataclass, replace
-from pathlib import Path
 from typing import Any, cast
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.verdicts.turning_points import grid_accelerations, precession_rate, turning_points_from_grid
-from foucault_bench.integrators import STATUS_OK, Problem, get_integrator
+from foucault_bench.integrators import STATUS_OK
 from foucault_bench.integrators.registry import REGISTRY
-from foucault_bench.models import PendulumParameters, get_model
-from foucault_bench.models.analytic import linear_exact
 from foucault_bench.reports.charts import integrator_style
-from foucault_bench.reports.simulation_settings import SimulationSettings
+from foucault_bench.bench.simulation import SimulationResult, simulate
+from foucault_bench.bench.simulation_settings import SimulationSettings
 
 DEGREES_PER_HOUR_PER_RAD_S = math.degrees(1.0) * 3600.0
-OUTPUT_POINTS_PER_PERIOD = 16
-"""Output grid density: 16 points per small-swing period (turning points need fewer than a quarter period
-between samples, ``bench.verdicts``; the extra density draws the swing smoothly)."""
-MAX_OUTPUT_POINTS = 400_000
-"""Largest output grid the command accepts (the view redraws it on every slider move)."""
-MAX_FRAMES = 200
-"""Most frames a saved animation may have: 10 s at the default 20 fps. Pillow keeps every frame of a GIF in
-memory until it writes the file (matplotlib's ``PillowWriter``): 200 frames of 800 × 480 pixels peaked at
-750 MB resident (measured), and each frame is a full redraw (about 0.4 s on an idle core)."""
-MAX_FPS = 50
-"""Highest frame rate of a saved animation: a GIF stores each frame's delay in whole hundredths of a second,
-and browsers slow delays below 2/100 s to about 1/10 s, so a GIF cannot play faster than 50 fps."""
-SAVE_SUFFIXES = (".gif", ".mp4")
-"""What ``--save`` writes: a GIF (Pillow) or an MP4 (ffmpeg)."""
-
-
-ANIMATION_DPI = 80
-"""Resolution of saved animations (a 10 × 6 in figure: 800 × 480 pixels)."""
 WINDOW_TITLE = "foucault-bench simulate"
 VIEW_BOUND = 1.2
 """Drawn region, in amplitudes from the centre: no model's bob goes past the amplitude (energy is conserved in the
@@ -82,64 +57,12 @@ TEXT_WRAP_CHARS = 46
 """Width (characters) at which messages in the figure are wrapped, so that they stay inside it."""
 
 
-@dataclass
-class SimulationResult:
-    """Numeric and analytic paths on one grid, turning points, measured and expected rates (rad/s)."""
-
-    settings: SimulationSettings
-    t_s: np.ndarray
-    numeric: np.ndarray
-    analytic: np.ndarray
-    turning_points: np.ndarray
-    measured_rate_rad_s: float
-    measured_rate_stderr_rad_s: float
-    expected_rate_rad_s: float
-    status: str
-    message: str
-    airy_rate_rad_s: float | None = None
-    """Airy's finite-amplitude rate for the spherical model (``PendulumParameters.airy_precession_rate_rad_s``),
-    ``None`` for the planar models."""
-
-    @property
-    def plane_rate_rad_s(self) -> float:
-        """The rate the expected swing plane turns at: Airy's for the spherical model, −ω sin φ otherwise."""
-        return self.expected_rate_rad_s if self.airy_rate_rad_s is None else self.airy_rate_rad_s
-
-    def drawn_until(self) -> int:
-        """Number of output points drawn: up to (not including) the first one that is not finite or lies beyond
-        ``VIEW_BOUND`` amplitudes from the centre."""
-        reach = np.hypot(self.numeric[:, 0], self.numeric[:, 1])
-        outside = ~(reach <= VIEW_BOUND * self.settings.amplitude_m)
-        return int(np.argmax(outside)) if outside.any() else len(self.t_s)
-
-
-def output_intervals(settings: SimulationSettings, params: PendulumParameters) -> int:
-    """Intervals of the output grid over ``settings.hours``: ``OUTPUT_POINTS_PER_PERIOD`` per small-swing
-    period of ``params`` (``settings.params()``), at least one."""
-    return max(1, math.ceil(OUTPUT_POINTS_PER_PERIOD * settings.hours * 3600.0 / params.small_swing_period_s))
-
-
-def simulate(settings: SimulationSettings) -> SimulationResult:
-    """Integrate the settings' model with its integrator and measure the precession (``ValueError`` for
-    parameters the model refuses, e.g. an amplitude not below the length)."""
-    params = settings.params()
-    duration = settings.hours * 3600.0
-    t = np.linspace(0.0, duration, output_intervals(settings, params) + 1)
-    model = get_model(settings.model)
-    integrator = get_integrator(settings.integrator)
-    problem = Problem(model=model, params=params, t_out=t)
-    if integrator.adaptive:
-        solution = integrator.solve(problem, tol=settings.setting)
-    else:
-        solution = integrator.solve(problem, step_s=settings.setting / params.pendulum_frequency_rad_s)
-    points = turning_points_from_grid(t, solution.y, grid_accelerations(model, params, solution.y),
-                                      include_release=True)
-    rate, stderr = precession_rate(points) if solution.status == STATUS_OK else (math.nan, math.nan)
-    return SimulationResult(settings=settings, t_s=t, numeric=solution.y, analytic=linear_exact(params, t),
-                            turning_points=points, measured_rate_rad_s=rate, measured_rate_stderr_rad_s=stderr,
-                            expected_rate_rad_s=params.textbook_precession_rate_rad_s, status=solution.status,
-                            message=solution.message,
-                            airy_rate_rad_s=params.airy_precession_rate_rad_s if settings.model == "spherical" else None)
+def drawn_until(result: SimulationResult) -> int:
+    """Number of output points drawn: up to (not including) the first one that is not finite or lies beyond
+    ``VIEW_BOUND`` amplitudes from the centre."""
+    reach = np.hypot(result.numeric[:, 0], result.numeric[:, 1])
+    outside = ~(reach <= VIEW_BOUND * result.settings.amplitude_m)
+    return int(np.argmax(outside)) if outside.any() else len(result.t_s)
 
 
 def map_view(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -259,7 +182,7 @@ def notice_text(result: SimulationResult) -> str:
     if result.status != STATUS_OK:
         message = result.message if result.message.startswith(result.status) else f"{result.status}: {result.message}"
         lines += _wrap(f"{result.settings.integrator} run {message}")
-    drawn = result.drawn_until()
+    drawn = drawn_until(result)
     if drawn < len(result.t_s):
         lines += _wrap(f"the path leaves {VIEW_BOUND:g} A from the centre at t = {result.t_s[drawn]:.4g} s: "
                        "not drawn after that")
@@ -336,7 +259,7 @@ class SimulationView:
         result = self.result
         assert result is not None
         stop = index + 1
-        shown = min(stop, result.drawn_until())
+        shown = min(stop, drawn_until(result))
         edges = np.linspace(0, max(shown - 1, 0), TRAIL_SEGMENTS + 1).round().astype(int)
         for piece, line in enumerate(self.trail):
             first, last = edges[piece], edges[piece + 1] + 1 if shown else 0
@@ -408,67 +331,6 @@ def open_window(settings: SimulationSettings) -> InteractiveSimulation:
     import matplotlib.pyplot as plt
 
     return InteractiveSimulation(plt.figure(num=WINDOW_TITLE, figsize=(12, 8)), settings)
-
-
-def save_path_problems(path: Path) -> list[str]:
-    """What keeps ``--save`` from writing ``path``, checked before any work (empty list: nothing): a suffix it
-    can write (``SAVE_SUFFIXES``; ffmpeg installed for .mp4), an existing folder it may write in (never
-    created), not a folder itself, and not a file the user may not write."""
-    from matplotlib.animation import writers
-
-    suffix = path.suffix.lower()
-    if suffix not in SAVE_SUFFIXES:
-        return [f"--save must end in {' or '.join(SAVE_SUFFIXES)}, got {path}"]
-    if suffix == ".mp4" and not writers.is_available("ffmpeg"):
-        return ["writing .mp4 needs ffmpeg, which is not installed (e.g. `apt-get install ffmpeg`); save a .gif instead"]
-    folder = path.parent
-    if path.is_dir():
-        return [f"--save {path}: is a folder; give a file name"]
-    if not folder.is_dir():
-        return [f"--save {path}: the folder {folder} does not exist (it is not created)" if not folder.exists()
-                else f"--save {path}: {folder} is not a folder"]
-    if not os.access(folder, os.W_OK | os.X_OK):
-        return [f"--save {path}: cannot write in the folder {folder}"]
-    if path.exists() and not os.access(path, os.W_OK):
-        return [f"--save {path}: the file is not writable"]
-    return []
-
-
-def save_animation(settings: SimulationSettings, path: Path, frames: int, fps: int) -> Path:
-    """Write the view as an animation to ``path`` (.gif with Pillow, .mp4 with ffmpeg), drawing with Agg.
-
-    The path is checked first (``save_path_problems``, ``InputError``). The animation is written to a
-    temporary file in the same folder and renamed over ``path`` once complete (``os.replace``, atomic), so a
-    full disk, a read-only folder or a kill leaves no partial file and any earlier file whole; a failed write is
-    an ``InputError`` naming the reason."""
-    from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-    problems = save_path_problems(path)
-    if problems:
-        raise InputError(problems)
-    writer = PillowWriter(fps=fps) if path.suffix.lower() == ".gif" else FFMpegWriter(fps=fps)
-    figure = Figure(figsize=(10, 6))
-    FigureCanvasAgg(figure)
-    view = SimulationView(figure, settings, (0.08, 0.1, 0.5, 0.82))
-    view.update(settings)
-    if view.result is None:  # parameters the model refuses: the figure's notice says why
-        raise InputError(" ".join(view.notice.get_text().split()))
-    last = len(view.result.t_s) - 1
-    indices = np.unique(np.linspace(0, last, max(2, min(frames, last + 1))).round().astype(int))
-    animation = FuncAnimation(figure, lambda i: view.show_until(int(i)), frames=indices, blit=False)
-    # the writers choose the format by the suffix: the temporary name keeps it
-    temporary = path.with_name(f".{path.stem}.{uuid.uuid4().hex[:8]}.partial{path.suffix}")
-    try:
-        animation.save(temporary, writer=writer, dpi=ANIMATION_DPI)
-        os.replace(temporary, path)
-    except (OSError, subprocess.CalledProcessError) as error:
-        reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
-        raise InputError(f"--save {path}: the animation could not be written ({reason}); nothing was left "
-                         "there") from None
-    finally:
-        temporary.unlink(missing_ok=True)
-    return path
 
 
 def show_interactive(settings: SimulationSettings) -> int:

@@ -67,7 +67,7 @@ DERIVED_NOTES: dict[str, str] = {
     "release_azimuth_deg": "°; direction of the release point from x (South) towards y (East)",
     "release": "initial velocity in the rotating frame",
     "output_interval_s": "s; spacing of the output grid shared by every integrator",
-    "why_model": "why the scene's model is enough (bench.problems.adequacy measures the others)",
+    "why_model": "why the scene's model is enough (bench.verdicts.adequacy measures the others)",
     "source": "where the scene's numbers come from",
     "kind": "fixed-step (fitted) or adaptive (no step size to fit against)",
     "fitted_order": "slope of log(reference_error) against log(step_s) by bench.verdicts.convergence."
@@ -81,7 +81,7 @@ DERIVED_NOTES: dict[str, str] = {
     "stability_limit_kh": "largest stable k·h the integrator declares (empty: unstable for every h)",
     "first_diverged_kh": "smallest k·h of the sweep whose run diverged within the sweep's steps",
     "largest_kh_not_diverged": "largest k·h of the sweep below first_diverged_kh",
-    "simpler_model": "the simpler model of the pair (bench.problems.adequacy)",
+    "simpler_model": "the simpler model of the pair (bench.verdicts.adequacy)",
     "scene_model": "the scene's own model",
     "precession_rate_diff": "(rate of simpler − rate of richer model) / (Ω_E|sin φ|), signed",
     "trajectory_gap": "max over the grid of |r_simpler − r_richer| / A",
@@ -119,9 +119,9 @@ spread over the repeats, wall time, accepted steps (the charts' second cost axis
 
 ADEQUACY_NOTES: dict[str, str] = {
     "model": "the richer model of the pair",
-    "note": "remark of bench.problems.adequacy on this pair",
+    "note": "remark of bench.verdicts.adequacy on this pair",
 }
-"""Meanings that differ in the adequacy table (``bench.problems.adequacy.model_adequacy``)."""
+"""Meanings that differ in the adequacy table (``bench.verdicts.adequacy.model_adequacy``)."""
 
 
 def notes_for(frame: pd.DataFrame, overrides: dict[str, str] | None = None) -> dict[str, str]:

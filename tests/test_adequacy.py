@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from foucault_bench.bench.problems.adequacy import model_adequacy
+from foucault_bench.bench.verdicts.adequacy import model_adequacy
 from foucault_bench.bench.problems.reference import reference_for
 from foucault_bench.bench.problems.scenes import SCENES, Scene
-from foucault_bench.bench.verdicts.turning_points import azimuth_error_bound, rate_error_bound, rate_scale
+from foucault_bench.bench.problems.turning_points import azimuth_error_bound, rate_error_bound, rate_scale
 
 COLUMNS = {"scene", "model", "simpler_model", "scene_model", "precession_rate_diff", "trajectory_gap",
            "expected_rate_diff", "expected_trajectory_gap", "note"}

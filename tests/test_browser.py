@@ -22,7 +22,7 @@ import pandas as pd
 import pytest
 
 from foucault_bench.reports.build import ReportInputs, build_report
-from foucault_bench.reports.studies import (
+from foucault_bench.bench.studies import (
     LongTimeEnergyConfig,
     PrecessionLatitudeConfig,
     StabilitySweepConfig,

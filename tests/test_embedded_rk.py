@@ -28,8 +28,10 @@ import pytest
 
 from foucault_bench.bench.problems.scenes import SCENES
 from foucault_bench.integrators import Solution, get_integrator
+from foucault_bench.integrators.embedded_rk import scipy_twins
 
-PAIRS = {"dopri5": "scipy_rk45", "dop853": "scipy_dop853"}
+PAIRS = scipy_twins()
+"""Compiled pair → scipy integrator taking the same steps, from the pairs' declarations (``steps_of``)."""
 SHORT_INTERVALS = 20
 TOLERANCES = (1e-4, 1e-8, 1e-12)
 FULL_RUN = ("pantheon", 1e-8)
@@ -208,6 +210,20 @@ def test_rejections_are_counted_as_scipy_makes_them() -> None:
 @pytest.mark.parametrize("name", ["dopri5", "dop853", "tsit5"])
 def test_declares_a_compiled_cost_basis(name: str) -> None:
     assert get_integrator(name).cost_basis == "compiled"
+
+
+def test_the_pairs_are_derived_from_the_declarations() -> None:
+    assert PAIRS == {"dop853": "scipy_dop853", "dopri5": "scipy_rk45"}  # today's declarations (dopri5.py, dop853.py)
+    assert "tsit5" not in PAIRS  # Tsitouras's pair is no scipy solver's
+
+
+def test_a_pair_declaring_another_tableau_s_steps_is_refused() -> None:
+    from scipy.integrate import RK45
+
+    from foucault_bench.integrators.methods.tsit5 import Tsit5
+
+    with pytest.raises(TypeError, match="differs from scipy"):
+        type("WrongTwin", (Tsit5,), {"name": "wrong_twin", "steps_of": RK45})
 
 
 def test_the_perf_section_times_only_pairs_that_take_the_same_steps(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -173,7 +173,7 @@ def test_a_refinement_at_its_parents_values_adds_no_adequacy_row_and_no_referenc
                                                                                        monkeypatch) -> None:
     import dataclasses
 
-    from foucault_bench.bench.problems import adequacy
+    from foucault_bench.bench.verdicts import adequacy
     from foucault_bench.bench.problems.scenes import SCENES
 
     models_run: list[str] = []

@@ -124,7 +124,7 @@ PROBE = textwrap.dedent("""
     import json
     from foucault_bench.integrators import REGISTRY, is_built_in
     from foucault_bench.integrators.registry import ENTRY_POINT_MODULES
-    from foucault_bench.bench.run.provenance import code_version
+    from foucault_bench.bench.provenance import code_version
     toy = REGISTRY.get("toy_midpoint")
     print(json.dumps({"loaded": toy is not None and not is_built_in(toy), "family": toy and toy.family,
                       "modules": ENTRY_POINT_MODULES, "code_version": code_version()}))

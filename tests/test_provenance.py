@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from foucault_bench.bench.run import provenance
+from foucault_bench.bench import provenance
 from foucault_bench.integrators import registry
 
 

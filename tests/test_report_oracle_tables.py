@@ -418,7 +418,7 @@ def test_the_reports_readme_describes_what_exists() -> None:
     the cost the decisions use, and the studies' sizes as the code sets them."""
     from foucault_bench.integrators.registry import REGISTRY, built_in_names
     from foucault_bench.reports import tables
-    from foucault_bench.reports.studies import (
+    from foucault_bench.bench.studies import (
         LongTimeEnergyConfig,
         PrecessionLatitudeConfig,
         ReleaseAzimuthConfig,

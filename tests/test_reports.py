@@ -14,7 +14,7 @@ import pytest
 
 from foucault_bench.bench.schema import COLUMN_NAMES
 from foucault_bench.bench.verdicts.pareto import pareto_front
-from foucault_bench.reports.studies import (
+from foucault_bench.bench.studies import (
     LongTimeEnergyConfig,
     PrecessionLatitudeConfig,
     StabilitySweepConfig,

@@ -480,7 +480,7 @@ def test_a_run_timeout_the_executors_cannot_wait_is_refused_before_anything_is_o
 
 def test_more_jobs_than_cores_are_capped_with_a_note(capsys):
     from foucault_bench.bench.commands.options import jobs
-    from foucault_bench.bench.run.provenance import available_cores
+    from foucault_bench.bench.provenance import available_cores
 
     assert jobs(10_000) == available_cores()
     assert f"--jobs 10000 is more than the {available_cores()} core(s) available" in capsys.readouterr().err

@@ -353,7 +353,7 @@ def test_an_out_in_a_read_only_folder_is_one_line_before_any_work(database, tmp_
 
 TINY_STUDY = """
 import pandas as pd
-from foucault_bench.reports.studies import STUDIES, Study
+from foucault_bench.bench.studies import STUDIES, Study
 STUDIES.clear()  # one tiny study instead of the real ones (minutes): what is tested is where it goes
 STUDIES["study_tiny"] = Study("study_tiny", lambda config, progress: pd.DataFrame({"x": [1.0, 2.0]}), None)
 """
@@ -450,7 +450,7 @@ def _sqlite_full_error() -> sqlite3.Error:
 
 def test_a_database_that_fills_up_is_one_line_not_a_traceback(database, tmp_path, monkeypatch, capsys):
     from foucault_bench.bench.run.store import ResultsStore
-    from foucault_bench.reports.studies import Study
+    from foucault_bench.bench.studies import Study
 
     _quick_sections(monkeypatch)
     full = _sqlite_full_error()
@@ -460,7 +460,7 @@ def test_a_database_that_fills_up_is_one_line_not_a_traceback(database, tmp_path
 
     monkeypatch.setattr(ResultsStore, "write_table", write_table)
     tiny = {"study_tiny": Study("study_tiny", lambda config, progress: pd.DataFrame({"x": [1.0]}), None)}
-    monkeypatch.setattr("foucault_bench.reports.studies.STUDIES", tiny)  # instead of minutes of real studies
+    monkeypatch.setattr("foucault_bench.bench.studies.stored.STUDIES", tiny)  # instead of minutes of real studies
     monkeypatch.setattr("foucault_bench.reports.build.STUDIES", tiny)
     before = sha256(database)
     assert cli_main(["report", "--db", str(database), "--out", str(tmp_path / "report"), "--studies", "stored"]) == 2

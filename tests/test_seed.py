@@ -1,4 +1,4 @@
-"""The seed note revisited (reports.studies.seed_revisited, reports.seed): the numbers behind each finding follow
+"""The seed note revisited (bench.studies.seed_revisited, reports.seed): the numbers behind each finding follow
 from the theory quoted in the finding, and `foucault-bench seed` writes its figures and text."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from foucault_bench.bench.cli import main as cli_main
-from foucault_bench.reports.studies import SeedStudy, seed_revisited
+from foucault_bench.bench.studies import SeedStudy, seed_revisited
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
 
 

@@ -19,18 +19,19 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.verdicts.turning_points import azimuth_error_bound, rate_error_bound
+from foucault_bench.bench.problems.turning_points import azimuth_error_bound, rate_error_bound
+from foucault_bench.bench.simulation import SimulationResult
+from foucault_bench.reports.animation import save_animation
+from foucault_bench.bench.simulation_settings import SimulationSettings
 from foucault_bench.reports.simulate import (
     DEGREES_PER_HOUR_PER_RAD_S,
     VIEW_BOUND,
     WINDOW_TITLE,
     InteractiveSimulation,
-    SimulationResult,
-    SimulationSettings,
     SimulationView,
+    drawn_until,
     format_setting,
     open_window,
-    save_animation,
 )
 from foucault_bench.bench.commands.simulate import add_arguments, settings_from_args
 
@@ -56,9 +57,9 @@ def _readout_rates(app: InteractiveSimulation) -> tuple[float, float]:
 def _rate_tolerance(result: SimulationResult) -> float:
     """Bound (rad/s) on the measured rate's error for Verlet on the linear model. Its precession is exact
     (integrators.methods.verlet), so the error comes from locating the turning points: the grid interpolation
-    (bench.verdicts.turning_points.azimuth_error_bound) plus the O((kh)²) mismatch between Verlet's velocities and the
+    (bench.problems.turning_points.azimuth_error_bound) plus the O((kh)²) mismatch between Verlet's velocities and the
     model's accelerations used by the interpolant, an azimuth error ≲ (a/k)(kh)²; turned into a slope error
-    by bench.verdicts.turning_points.rate_error_bound."""
+    by bench.problems.turning_points.rate_error_bound."""
     params = result.settings.params()
     a_over_k = abs(params.vertical_rate_rad_s) / params.pendulum_frequency_rad_s
     azimuth = azimuth_error_bound(params, result.t_s[1] - result.t_s[0]) + a_over_k * result.settings.setting**2
@@ -238,7 +239,7 @@ def test_a_diverging_run_stays_in_view_and_says_when_it_diverged() -> None:
     view.update(settings)
     result = view.result
     assert result.status == "diverged"
-    drawn = result.drawn_until()
+    drawn = drawn_until(result)
     reach = np.hypot(result.numeric[:, 0], result.numeric[:, 1])
     assert 0 < drawn < len(result.t_s) and reach[drawn] > VIEW_BOUND * settings.amplitude_m
     east, north = view.drawn_path()

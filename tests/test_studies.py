@@ -1,4 +1,4 @@
-"""The study computations of reports.studies, at small sizes, against what the physics and numerics say
+"""The study computations of bench.studies, at small sizes, against what the physics and numerics say
 (integrators/README.md "Fixed-step methods on this problem"; models/README.md "Airy precession"): explicit Euler's
 energy grows as (1 + (kh)²)ⁿ, Verlet's stays within (kh)²/4, each fixed-step integrator is stable below its
 declared limit and blows up above it, and the measured precession follows −Ω_E sin φ with the Airy correction at
@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from foucault_bench.reports.studies import (
+from foucault_bench.bench.studies import (
     STUDIES,
     LongTimeEnergyConfig,
     PrecessionLatitudeConfig,
@@ -206,7 +206,7 @@ def test_ensure_studies_computes_missing_tables_once_and_reads_them_back() -> No
 def test_a_stored_study_of_another_version_is_recomputed() -> None:
     """A table stored before the release-azimuth study kept the step taken (no ``study_version`` column: version
     1) is not shown as the current study: it is recomputed, and the new table says its version."""
-    from foucault_bench.reports.studies import STUDY_VERSION_COLUMN
+    from foucault_bench.bench.studies import STUDY_VERSION_COLUMN
 
     small = {
         "study_long_time_energy": LongTimeEnergyConfig(model="linear", duration_s=60.0, n_out=31,
@@ -301,7 +301,7 @@ def test_the_long_time_energy_text_states_what_its_table_shows(tmp_path) -> None
     """Every run of the table is named once in the text, with the largest error after the first hour (here half
     the 1200-s run) and at the end, the fitted exponent and the class it implies, as recomputed here from the
     table; a diverged run is said to diverge where its finite rows end."""
-    from foucault_bench.reports.studies import BOUNDED_BELOW_EXPONENT, GROWING_ABOVE_EXPONENT
+    from foucault_bench.bench.studies import BOUNDED_BELOW_EXPONENT, GROWING_ABOVE_EXPONENT
 
     table = long_time_energy(ENERGY_TEXT_CONFIG, progress=False)
     assert sorted(table["family"].unique()) == sorted(_built_in_families())

@@ -1,5 +1,5 @@
 """The built-in thresholds' bases that quote the measurement floor of a precession rate
-(``bench.verdicts.turning_points.rate_measurement_floor``) quote what it computes for their scene, and every such
+(``bench.problems.turning_points.rate_measurement_floor``) quote what it computes for their scene, and every such
 bound lies above that floor: a bound below it would fail an exact integrator for the grid's error."""
 
 from __future__ import annotations
@@ -11,10 +11,10 @@ from pathlib import Path
 import pytest
 
 from foucault_bench.bench.problems.scenes import SCENES
-from foucault_bench.bench.verdicts.turning_points import rate_measurement_floor
+from foucault_bench.bench.problems.turning_points import rate_measurement_floor
 
 THRESHOLDS = Path(__file__).resolve().parents[1] / "bench" / "thresholds" / "default.toml"
-FLOOR_CITED = re.compile(r"floor ([0-9.]+e-?[0-9]+) on this scene, bench\.verdicts\.turning_points\.rate_measurement_floor")
+FLOOR_CITED = re.compile(r"floor ([0-9.]+e-?[0-9]+) on this scene, bench\.problems\.turning_points\.rate_measurement_floor")
 
 
 def bounds_citing_the_floor() -> list[dict]:

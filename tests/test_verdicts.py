@@ -12,7 +12,7 @@ from foucault_bench.bench.problems.reference import reference_for
 from foucault_bench.bench.problems.scenes import SCENES, Scene
 from foucault_bench.bench.verdicts.columns import compute_verdicts
 from foucault_bench.bench.verdicts.convergence import observed_order
-from foucault_bench.bench.verdicts.turning_points import (
+from foucault_bench.bench.problems.turning_points import (
     azimuth_error_bound,
     grid_accelerations,
     precession_rate,
@@ -32,7 +32,7 @@ def shortened(scene: Scene, duration_s: float) -> Scene:
 
 
 def measurement_bound(scene: Scene, turning_times_s: np.ndarray) -> float:
-    """Worst-case error (rad/s) of a rate measured on the scene's grid (bench.verdicts.turning_points.azimuth_error_bound)."""
+    """Worst-case error (rad/s) of a rate measured on the scene's grid (bench.problems.turning_points.azimuth_error_bound)."""
     return rate_error_bound(turning_times_s, azimuth_error_bound(scene.params, scene.output_interval_s,
                                                                  scene.duration_s))
 

@@ -10,7 +10,7 @@ import pytest
 
 from foucault_bench.integrators import Problem, get_integrator
 from foucault_bench.models import MODELS, PendulumParameters
-from foucault_bench.reports.studies import ReleaseAzimuthConfig, precession_vs_release_azimuth
+from foucault_bench.bench.studies import ReleaseAzimuthConfig, precession_vs_release_azimuth
 
 PARIS = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
 

@@ -70,7 +70,7 @@ def advise(store: ResultsStore, scene: Scene, target: Target, *, search_jobs: in
         best = run_record(runs.loc[usable["error"].idxmin()], target.metric, cost)
     notes = same_name_notes(store.frame(all_runs=True), scene)
     if not runs.empty:
-        from foucault_bench.bench.run.provenance import code_version
+        from foucault_bench.bench.provenance import code_version
 
         stale = runs["code_version"].notna() & (runs["code_version"] != code_version())
         if stale.any():

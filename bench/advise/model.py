@@ -1,5 +1,5 @@
 """Which model a scene needs at a target error, from the model-adequacy rows stored for its physics
-(``bench.problems.adequacy``): what a simpler model gets wrong, or what the scene's model leaves out."""
+(``bench.verdicts.adequacy``): what a simpler model gets wrong, or what the scene's model leaves out."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from foucault_bench.bench.run.store import ResultsStore
 
 
 def model_advice(adequacy: pd.DataFrame, scene: Scene, target: Target) -> dict[str, Any]:
-    """Which model the scene needs at the target, from its model-adequacy rows (``bench.problems.adequacy``):
+    """Which model the scene needs at the target, from its model-adequacy rows (``bench.verdicts.adequacy``):
     the precession-rate difference for a precession target, the trajectory gap otherwise, compared with the
     target."""
     quantity, unit = (("precession_rate_diff", "Ω_E|sin φ|") if target.metric.startswith("precession")

@@ -38,7 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def main(args: argparse.Namespace) -> int:
     from foucault_bench.bench.advise import advise, metric_problem, parse_target, render_json, render_text, \
         resolve_scene
-    from foucault_bench.bench.run.provenance import available_cores
+    from foucault_bench.bench.provenance import available_cores
     from foucault_bench.bench.run.store import ResultsStore
 
     target, problems = parse_target(args.target)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from foucault_bench.bench.errors import InputError
-from foucault_bench.bench.run.provenance import available_cores
+from foucault_bench.bench.provenance import available_cores
 
 
 def jobs(value: int | None) -> int:

@@ -10,7 +10,7 @@ from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.validation import (
     coarse_steps_problem, finite_number, setting_problem, step_count_problem, suggestion,
 )
-from foucault_bench.reports.simulation_settings import SimulationSettings
+from foucault_bench.bench.simulation_settings import SimulationSettings
 
 
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -61,9 +61,8 @@ def settings_from_args(args: argparse.Namespace) -> SimulationSettings:
     from foucault_bench.bench.problems.scenes import physical_limit_problems
     from foucault_bench.integrators import REGISTRY
     from foucault_bench.models import MODELS
-    from foucault_bench.reports.simulate import (
-        MAX_FPS, MAX_FRAMES, MAX_OUTPUT_POINTS, OUTPUT_POINTS_PER_PERIOD, output_intervals, save_path_problems,
-    )
+    from foucault_bench.bench.simulation import MAX_OUTPUT_POINTS, OUTPUT_POINTS_PER_PERIOD, output_intervals
+    from foucault_bench.reports.animation import MAX_FPS, MAX_FRAMES, save_path_problems
 
     problems = []
     if args.integrator not in REGISTRY:
@@ -119,7 +118,7 @@ def settings_from_args(args: argparse.Namespace) -> SimulationSettings:
 def main(args: argparse.Namespace) -> int:
     settings = settings_from_args(args)
     if args.save is not None:
-        from foucault_bench.reports.simulate import save_animation
+        from foucault_bench.reports.animation import save_animation
 
         path = save_animation(settings, args.save, args.frames, args.fps)
         print(f"animation written: {path}")

@@ -20,12 +20,14 @@ from functools import partial
 from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio
 from foucault_bench.bench.problems.scenes import SCENES
 from foucault_bench.integrators import get_integrator
+from foucault_bench.integrators.embedded_rk import scipy_twins
 
 SECTION = "erk"
 TOL = 1.0e-8
 SCENE = "pantheon"
 TARGET = 1.0 / 50.0
-PAIRS = {"dopri5": "scipy_rk45", "dop853": "scipy_dop853"}
+PAIRS = scipy_twins()
+"""Compiled pair → the scipy integrator it takes the steps of (``integrators.embedded_rk.scipy_twins``)."""
 
 
 def _problem(quick: bool):

@@ -62,7 +62,7 @@ def dominant(frame: pd.DataFrame, label: str, wall_s: float, jobs: int) -> list[
 
 def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
     """Cold and warm matrix runs; the rows, a table of where the time went and its headers."""
-    from foucault_bench.bench.run.provenance import available_cores
+    from foucault_bench.bench.provenance import available_cores
 
     jobs = available_cores()
     headers = ["run", "integrator", "runs", "busy s", "share of workers' time", "longest run s"]

@@ -9,10 +9,15 @@
   imports of the main process, the matrix validation, the references and model adequacy and the runs (the work
   of a worker, which pays the same imports again in its own interpreter), the store (open, provenance, writes)
   and the summary. Medians of ``REPEATS`` fresh interpreters.
+
+The command line is the layer above ``bench``: this section runs it as a user does, in a subprocess, and loads
+it by its module name (``CLI_MODULE``, ``COMMANDS_MODULE``, as ``python -m`` does) where it times the import in
+this interpreter, so that the harness depends on nothing of it at import time.
 """
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import statistics
@@ -41,6 +46,8 @@ min_repeats = 1
 min_total_s = 0.05
 max_repeats = 3
 """
+CLI_MODULE = "foucault_bench.bench.cli"
+COMMANDS_MODULE = "foucault_bench.bench.commands"
 PIECES = ("command-line module", "imports of the runner, matrix and store", "matrix validation",
           "references (warm cache) and model adequacy", "integration and verdicts (5 runs)",
           "store: open, provenance, writes", "summary")
@@ -48,7 +55,7 @@ PIECES = ("command-line module", "imports of the runner, matrix and store", "mat
 
 
 def _cli(*arguments: str) -> list[str]:
-    return [sys.executable, "-m", "foucault_bench.bench.cli", *arguments]
+    return [sys.executable, "-m", CLI_MODULE, *arguments]
 
 
 def _median_wall(command: list[str], repeats: int) -> tuple[float, list[float]]:
@@ -64,7 +71,7 @@ def _median_wall(command: list[str], repeats: int) -> tuple[float, list[float]]:
 def probe(matrix_path: str) -> dict[str, float]:
     """The pieces of a ``run`` of the matrix, in this (fresh) interpreter, one after the other (s)."""
     marks = [time.perf_counter()]
-    import foucault_bench.bench.cli  # noqa: F401  (what every command pays)
+    importlib.import_module(CLI_MODULE)  # what every command pays
 
     marks.append(time.perf_counter())
     from foucault_bench.bench.run import runner
@@ -95,9 +102,8 @@ def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
     """Help times, the small matrix's wall time and its pieces; the rows, a detail table and its headers."""
     repeats = 3 if quick else REPEATS
     rows, table = [], []
-    from foucault_bench.bench.commands import COMMANDS
-
-    for command in ("", *COMMANDS):
+    commands = importlib.import_module(COMMANDS_MODULE).COMMANDS
+    for command in ("", *commands):
         median_s, walls = _median_wall(_cli(*filter(None, [command]), "--help"), repeats)
         rows.append(Row(SECTION, f"foucault-bench {command + ' ' if command else ''}--help", median_s, "s",
                         TARGET_HELP_S, f"median of {repeats}; max {max(walls):.2f} s"))

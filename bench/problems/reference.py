@@ -35,7 +35,7 @@ import numpy as np
 
 from foucault_bench.bench.problems.scene_key import physics_identity
 from foucault_bench.bench.problems.scenes import Scene
-from foucault_bench.bench.run.provenance import PACKAGE_ROOT, source_digest
+from foucault_bench.bench.provenance import PACKAGE_ROOT, source_digest
 from foucault_bench.integrators import STATUS_OK, get_integrator
 from foucault_bench.integrators.methods.heyoka_taylor import REFERENCE_TOLERANCE
 
@@ -54,7 +54,7 @@ class Reference:
         t: output times (s), the scene's grid.
         y: states (x, y, ẋ, ẏ) in m and m/s, shape (len(t), 4), float64.
         turning_points: (t in s, x in m, y in m) of each radius maximum, release point included for a release
-            from rest (``bench.verdicts.turning_points.turning_points_from_grid``), shape (n, 3).
+            from rest (``bench.problems.turning_points.turning_points_from_grid``), shape (n, 3).
         precession_rate_rad_s: swing-plane rate measured from them (counter-clockwise about up positive).
         precession_rate_stderr_rad_s: its standard error.
         key: the cache key (see module docstring).
@@ -85,7 +85,7 @@ def cache_directory() -> Path:
 @functools.lru_cache(maxsize=None)
 def sources_version() -> str:
     """SHA-256 (16 hex digits) of the sources that determine a reference trajectory, and heyoka's version
-    (``bench.run.provenance.source_digest``; the version from the package metadata: importing heyoka to read
+    (``bench.provenance.source_digest``; the version from the package metadata: importing heyoka to read
     it would cost a worker about 0.7 s)."""
     integrator_module = Path(cast(str, inspect.getsourcefile(type(get_integrator(REFERENCE_INTEGRATOR))))).resolve()
     sources = sorted((PACKAGE_ROOT / "models").glob("*.py"))
@@ -156,8 +156,8 @@ def _compute(scene: Scene, key: str) -> Reference:
 def _derive(scene: Scene, t: np.ndarray, y: np.ndarray, **provenance: Any) -> Reference:
     """A ``Reference`` with the turning points and precession rate measured on its grid."""
     # here, not at the top: the turning points import scipy, which a process that only reads matrices (and so
-    # this module's constants) should not pay. No cycle: bench.verdicts.turning_points imports only models.
-    from foucault_bench.bench.verdicts.turning_points import (
+    # this module's constants) should not pay. No cycle: bench.problems.turning_points imports only models.
+    from foucault_bench.bench.problems.turning_points import (
         grid_accelerations, precession_rate, released_from_rest, turning_points_from_grid,
     )
 

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
 MIN_OUTPUT_INTERVALS_PER_PERIOD = 5.0
 """The output interval must be at most 1/5 of the small-swing period: turning points are located on the grid
-(``bench.verdicts.turning_points.turning_points_from_grid``), which needs samples on both sides of each radius maximum
+(``bench.problems.turning_points.turning_points_from_grid``), which needs samples on both sides of each radius maximum
 (strictly less than a quarter period; a fifth leaves a margin for the longer period of large swings)."""
 
 MAX_OUTPUT_POINTS = 2_000_000
@@ -109,7 +109,7 @@ def scene_name_problem(name: Any, max_length: int | None = MAX_SCENE_NAME_LENGTH
     """Why ``name`` cannot name a scene, or ``None``: its characters (``SCENE_NAME_PATTERN``, every scene) and
     its length (``max_length``; ``bench.run.matrix`` holds every scene a matrix runs to
     ``MAX_SCENE_NAME_LENGTH``, while a scene made inside a computation, such as the model variants
-    ``NAME.spherical`` of ``bench.problems.adequacy``, names no file and may be longer)."""
+    ``NAME.spherical`` of ``bench.verdicts.adequacy``, names no file and may be longer)."""
     if not isinstance(name, str) or not SCENE_NAME_PATTERN.fullmatch(name):
         return f"scene name {short_repr(name)} may hold only letters, digits, '_', '.' and '-'"
     if max_length is not None and len(name) > max_length:
@@ -124,7 +124,7 @@ def physical_limit_problems(params: PendulumParameters) -> list[str]:
     * **Earth's rate below the pendulum's frequency**, Ω < k = √(g/L). The rotating-frame models describe a swing
       whose plane Earth turns slowly: by π Ω sin φ / k per swing. At Ω ≥ k that is up to half a turn or more per
       swing, so there is no swing plane whose turning points the precession measurement could follow
-      (``bench.verdicts.turning_points``), and the terms of relative size (Ω/k)² that the planar models drop
+      (``bench.problems.turning_points``), and the terms of relative size (Ω/k)² that the planar models drop
       (models/README.md "The three models") are of order one. Earth's Ω_E/k is 10⁻⁵-10⁻⁴ for real pendulums.
     * **The bob stays below the pivot's height.** The spherical model's coordinates end there (z = −√(L² − x²
       − y²), ``models.spherical``), a string can go slack above it, and the planar models approximate the

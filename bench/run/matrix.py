@@ -58,7 +58,7 @@ from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR, physic
 from foucault_bench.bench.problems.scene import Scene, scene_name_problem
 from foucault_bench.bench.problems.scene_reader import read_scene_tables
 from foucault_bench.bench.problems.scenes import SCENES
-from foucault_bench.bench.run.provenance import code_version, digest
+from foucault_bench.bench.provenance import code_version, digest
 from foucault_bench.bench.run.timing import TimingPolicy
 from foucault_bench.bench.schema import declared_facts, setting_label
 from foucault_bench.bench.validation import (

@@ -5,7 +5,7 @@ Order of work (``run_matrix``):
 1. open a matrix run in the results store (``--resume`` continues the latest one with the same matrix hash
    and skips the run keys it already holds); the matrix run is locked while this process writes to it;
 2. per scene, in the workers: the reference (``bench.problems.reference.reference_for``, cached on disk) and the
-   model-adequacy rows (``bench.problems.adequacy.model_adequacy``), stored in the ``adequacy`` table; a scene whose
+   model-adequacy rows (``bench.verdicts.adequacy.model_adequacy``), stored in the ``adequacy`` table; a scene whose
    reference cannot be computed has all its runs stored as ``failed`` rows with the reason;
 3. every run (``execute_run``): the integrator's ``solve`` on the scene's problem (the scene's output grid,
    identical for every integrator), timed by the protocol of ``bench.run.timing``; the timed call does the
@@ -102,7 +102,7 @@ def import_plugins(plugins: tuple[str, ...]) -> None:
 
 def prepare_scene(scene: Scene, plugins: tuple[str, ...] = ()) -> SceneReady:
     """Compute (or load from the disk cache) the scene's reference and its model-adequacy rows."""
-    from foucault_bench.bench.problems.adequacy import model_adequacy
+    from foucault_bench.bench.verdicts.adequacy import model_adequacy
     from foucault_bench.bench.problems.reference import reference_for
 
     limit_threads()

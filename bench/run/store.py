@@ -6,7 +6,7 @@ Tables:
   The runner writes and commits each row as soon as its run finishes, so a killed matrix keeps what finished.
 * ``matrix_runs``: one row per matrix run with its provenance (matrix name, source and hash, code version, git
   commit, package versions, CPU model, host, UTC start and end, jobs or scheduler, status).
-* ``adequacy``: the model-adequacy rows of ``bench.problems.adequacy.model_adequacy`` per matrix run and scene.
+* ``adequacy``: the model-adequacy rows of ``bench.verdicts.adequacy.model_adequacy`` per matrix run and scene.
 * any study table another module writes with ``write_table`` (read back with ``read_table``).
 
 The database records the results schema version (``bench.schema.SCHEMA_VERSION``) as SQLite's
@@ -194,7 +194,7 @@ class ResultsStore:
         With ``resume`` the latest matrix run with the same matrix hash (same runs, same code version) is
         continued, so that one matrix id ends up holding every row once; otherwise a new id is made.
         """
-        from foucault_bench.bench.run.provenance import code_version, machine
+        from foucault_bench.bench.provenance import code_version, machine
 
         now = utc_now()
         if resume:

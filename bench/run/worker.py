@@ -57,7 +57,7 @@ WORKER_MODULES = (
     "heyoka",  # the reference integrator's library: imported before any timed call, never counted as compile time
     "foucault_bench.integrators",
     "foucault_bench.bench.problems.reference",
-    "foucault_bench.bench.problems.adequacy",
+    "foucault_bench.bench.verdicts.adequacy",
     "foucault_bench.bench.verdicts.columns",
 )
 """What a worker imports to run (``warm_up``, its first task, while the main process validates the matrix)."""

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from foucault_bench.bench.schema import VERDICT_COLUMNS
-from foucault_bench.bench.verdicts.turning_points import (
+from foucault_bench.bench.problems.turning_points import (
     finite_prefix,
     grid_accelerations,
     least_squares_slope,

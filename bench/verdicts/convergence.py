@@ -7,7 +7,7 @@ from typing import Sequence
 
 import numpy as np
 
-from foucault_bench.bench.verdicts.turning_points import least_squares_slope
+from foucault_bench.bench.problems.turning_points import least_squares_slope
 
 NAN = math.nan
 

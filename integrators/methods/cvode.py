@@ -22,7 +22,7 @@ scikit-sundae uses, so that ``cvode_*`` and ``cvode_*_py`` run the same algorith
 * **Output.** Values at the output times come from CVODE's interpolating polynomial (``CV_NORMAL`` mode),
   which does not change the steps taken after the first (the first output time enters CVODE's initial step
   estimate: ``output_span``); the timed call integrates to the output grid and nothing else (no
-  root finding): turning points are located on the grid by ``bench.verdicts.turning_points``, the same
+  root finding): turning points are located on the grid by ``bench.problems.turning_points``, the same
   procedure for every integrator.
 * **Counters.** ``nfev`` (CVodeGetNumRhsEvals, plus CVodeGetNumLinRhsEvals), ``njev`` (CVodeGetNumJacEvals),
   ``steps`` (CVodeGetNumSteps) and ``rejected_steps`` (CVodeGetNumErrTestFails: steps rejected by the local

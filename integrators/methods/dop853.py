@@ -21,6 +21,7 @@ from __future__ import annotations
 from typing import ClassVar
 
 import numpy as np
+from scipy.integrate import DOP853, OdeSolver
 
 from foucault_bench.integrators.embedded_rk import EmbeddedRungeKutta
 from foucault_bench.integrators.registry import register
@@ -186,4 +187,5 @@ class Dop853(EmbeddedRungeKutta):
 
     name: ClassVar[str] = "dop853"
     tableau: ClassVar[ButcherTableau] = TABLEAU
+    steps_of: ClassVar[type[OdeSolver] | None] = DOP853
     reference: ClassVar[str] = TABLEAU.reference

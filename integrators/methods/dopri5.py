@@ -19,6 +19,8 @@ from __future__ import annotations
 
 from typing import ClassVar
 
+from scipy.integrate import RK45, OdeSolver
+
 from foucault_bench.integrators.embedded_rk import EmbeddedRungeKutta
 from foucault_bench.integrators.registry import register
 from foucault_bench.integrators.tableau import ButcherTableau
@@ -59,4 +61,5 @@ class Dopri5(EmbeddedRungeKutta):
 
     name: ClassVar[str] = "dopri5"
     tableau: ClassVar[ButcherTableau] = TABLEAU
+    steps_of: ClassVar[type[OdeSolver] | None] = RK45
     reference: ClassVar[str] = TABLEAU.reference

@@ -26,7 +26,7 @@ Facts the tables rely on:
   many (and correspondingly more accurate) steps on these models (Panthéon, linear model, 1 h at tol = machine
   epsilon: 2592 steps with events, 1333 without). The benchmark runner and the references therefore call
   with ``monitor=False`` (no event: the same work as every other integrator, the turning points come from the
-  output grid, ``bench.verdicts.turning_points``); ``monitor=True`` is for users who want heyoka's own event
+  output grid, ``bench.problems.turning_points``); ``monitor=True`` is for users who want heyoka's own event
   location (and the tests that compare it with the grid's).
 * **Failures.** The iteration limit (``max_steps``, default ``integrators.adaptive.step_budget``) becomes a
   ``failed`` solution and a non-finite state a ``diverged`` one, each with heyoka's outcome in the message.

@@ -14,7 +14,7 @@ facts. Configuration (SciPy reference guide, ``scipy.integrate.solve_ivp``):
   ``direction = −1`` (radius maxima); scipy reports the release point t = 0 as a root for a release from rest,
   which ``integrators.adaptive.turning_points`` drops. The benchmark runner times ``monitor=False`` (no event
   function: the same work as every other integrator; the verdicts take the turning points from the output
-  grid, ``bench.verdicts.turning_points``).
+  grid, ``bench.problems.turning_points``).
 * **Counters.** ``nfev``, ``njev`` from the result; ``steps`` = accepted steps, counted by a subclass of the
   method's ``OdeSolver`` (``solve_ivp`` accepts a solver class as ``method``) whose ``step`` counts successful
   calls; ``rejected_steps`` is ``None`` (scipy does not report it).

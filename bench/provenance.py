@@ -27,7 +27,7 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any, Iterable
 
-PACKAGE_ROOT = Path(__file__).resolve().parents[2]
+PACKAGE_ROOT = Path(__file__).resolve().parents[1]
 """The folder holding ``bench/``, ``models/``, ``integrators/``: the repository in a checkout or an editable
 install, ``site-packages/foucault_bench`` in a wheel install."""
 NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "integrators/methods/*.py", "bench/problems/*.py",

@@ -19,7 +19,7 @@ planar vs spherical differ in rate by the Airy term −sign(sin φ)(3/8)θ₀² 
 Olsson, Am. J. Phys. 49, 531, 1981) and in swing frequency by the finite-amplitude term k θ₀²/16 (Landau &
 Lifshitz, Mechanics, §28, eq. 28.13), which moves the trajectories apart by ≈ 2|sin(½ k θ₀² t / 16)| · A.
 
-``python -m foucault_bench.bench.problems.adequacy`` prints the table of the built-in scenes (references from the
+``python -m foucault_bench.bench.verdicts.adequacy`` prints the table of the built-in scenes (references from the
 cache or computed).
 """
 
@@ -32,7 +32,7 @@ from typing import Any
 from foucault_bench.bench.problems.reference import Reference, reference_for
 from foucault_bench.bench.problems.scenes import Scene
 from foucault_bench.bench.verdicts.columns import max_position_gap
-from foucault_bench.bench.verdicts.turning_points import rate_scale
+from foucault_bench.bench.problems.turning_points import rate_scale
 from foucault_bench.models import MODELS, get_model, richer_models, simpler_models
 from foucault_bench.models.parameters import airy_fraction
 
@@ -114,7 +114,7 @@ def adequacy_table(scenes: list[Scene]) -> list[dict[str, Any]]:
     return [row for scene in scenes for row in model_adequacy(scene)]
 
 
-if __name__ == "__main__":  # python -m foucault_bench.bench.problems.adequacy: the table of the built-in scenes
+if __name__ == "__main__":  # python -m foucault_bench.bench.verdicts.adequacy: the table of the built-in scenes
     from foucault_bench.bench.problems.scenes import SCENES
 
     for entry in adequacy_table(list(SCENES.values())):
