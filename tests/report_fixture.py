@@ -22,9 +22,8 @@ second:
 ``tests/conftest.py`` registers its pytest fixtures for every test module: ``fixture_database`` builds the file
 once per test session, ``fixture_report`` the report of that database with ``reports.build.build_report``
 (studies skipped, no seed section; the slowest fixture of the suite). Under pytest-xdist both are built once for
-all the session's workers, in the session's shared temporary folder under a file lock (``built_once``), and
-``tests/conftest.py`` sends every test that uses the report to one worker (``--dist loadgroup``), so the other
-workers never wait for it. Helpers and constants are imported with ``from report_fixture import ...``.
+all the session's workers, in the session's shared temporary folder under a file lock (``built_once``): the
+first worker that needs one builds it, a worker that needs it meanwhile waits for it. Helpers and constants are imported with ``from report_fixture import ...``.
 """
 
 from __future__ import annotations
@@ -220,10 +219,6 @@ def build_fixture_report(database: Path, folder: Path) -> Path:
     build_report(ReportInputs(runs=runs, adequacy=adequacy, provenance={"database": database.name},
                               include_seed=False), folder)
     return folder
-
-
-REPORT_GROUP = "report-fixture"
-"""The pytest-xdist group (``--dist loadgroup``) of every test that uses ``fixture_report``: one worker builds it."""
 
 
 def built_once(tmp_path_factory: pytest.TempPathFactory, name: str, build: Callable[[Path], object]) -> Path:
