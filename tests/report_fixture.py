@@ -29,7 +29,6 @@ first worker that needs one builds it, a worker that needs it meanwhile waits fo
 from __future__ import annotations
 
 import math
-import os
 import shutil
 from collections.abc import Callable
 from pathlib import Path
@@ -221,13 +220,13 @@ def build_fixture_report(database: Path, folder: Path) -> Path:
     return folder
 
 
-def built_once(tmp_path_factory: pytest.TempPathFactory, name: str, build: Callable[[Path], object]) -> Path:
+def built_once(request: pytest.FixtureRequest, name: str, build: Callable[[Path], object]) -> Path:
     """``build(path)`` run once per test session for ``path`` = ``name`` in the session's temporary folder, which
     pytest-xdist's workers share (the parent of each worker's own base folder, as pytest-xdist's documentation
     recommends); the first worker to ask builds it under a file lock, the others wait for it and reuse it. A build
     that raised leaves no completion marker: the next worker that asks starts it again from nothing."""
-    root = tmp_path_factory.getbasetemp()
-    if os.environ.get("PYTEST_XDIST_WORKER"):
+    root = request.getfixturevalue("tmp_path_factory").getbasetemp()
+    if hasattr(request.config, "workerinput"):  # a pytest-xdist worker (not a pytest run by a test on one)
         root = root.parent
     path, done = root / name, root / f"{name}.done"
     with FileLock(root / f"{name}.lock"):
@@ -241,13 +240,13 @@ def built_once(tmp_path_factory: pytest.TempPathFactory, name: str, build: Calla
 
 
 @pytest.fixture(scope="session")
-def fixture_database(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def fixture_database(request: pytest.FixtureRequest) -> Path:
     """The fixture database (``build_fixture_database``), built once per test session."""
-    return built_once(tmp_path_factory, "fixture.sqlite", build_fixture_database)
+    return built_once(request, "fixture.sqlite", build_fixture_database)
 
 
 @pytest.fixture(scope="session")
-def fixture_report(fixture_database: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+def fixture_report(fixture_database: Path, request: pytest.FixtureRequest) -> Path:
     """The report folder of the fixture database (``build_fixture_report``), built once per test session."""
-    return built_once(tmp_path_factory, "report-fixture-report",
+    return built_once(request, "report-fixture-report",
                       lambda folder: build_fixture_report(fixture_database, folder))
