@@ -20,18 +20,22 @@ second:
 * model-adequacy rows whose notes hold ``|``, ``<`` and ``&``.
 
 ``tests/conftest.py`` registers its pytest fixtures for every test module: ``fixture_database`` builds the file
-once per session, ``fixture_report`` the report of that database with ``reports.build.build_report`` (studies
-skipped, no seed section; a few minutes on a loaded 2-core machine, so only once per session). Helpers and
-constants are imported with ``from report_fixture import ...``.
+once per test session, ``fixture_report`` the report of that database with ``reports.build.build_report``
+(studies skipped, no seed section; the slowest fixture of the suite). Under pytest-xdist both are built once for
+all the session's workers, in the session's shared temporary folder under a file lock (``built_once``): the
+first worker that needs one builds it, a worker that needs it meanwhile waits for it. Helpers and constants are imported with ``from report_fixture import ...``.
 """
 
 from __future__ import annotations
 
 import math
+import shutil
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
+from filelock import FileLock
 
 if TYPE_CHECKING:  # imported where used: tests/conftest.py imports this module for every test session
     from foucault_bench.bench.run.matrix import Matrix, RunSpec
@@ -206,6 +210,8 @@ def build_fixture_report(database: Path, folder: Path) -> Path:
     from foucault_bench.bench.run.store import ResultsStore
     from foucault_bench.reports.build import ReportInputs, build_report
 
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
     with ResultsStore(database, create=False) as store:
         runs = store.frame()
         adequacy = store.adequacy()
@@ -214,13 +220,33 @@ def build_fixture_report(database: Path, folder: Path) -> Path:
     return folder
 
 
+def built_once(request: pytest.FixtureRequest, name: str, build: Callable[[Path], object]) -> Path:
+    """``build(path)`` run once per test session for ``path`` = ``name`` in the session's temporary folder, which
+    pytest-xdist's workers share (the parent of each worker's own base folder, as pytest-xdist's documentation
+    recommends); the first worker to ask builds it under a file lock, the others wait for it and reuse it. A build
+    that raised leaves no completion marker: the next worker that asks starts it again from nothing."""
+    root = request.getfixturevalue("tmp_path_factory").getbasetemp()
+    if hasattr(request.config, "workerinput"):  # a pytest-xdist worker (not a pytest run by a test on one)
+        root = root.parent
+    path, done = root / name, root / f"{name}.done"
+    with FileLock(root / f"{name}.lock"):
+        if not done.exists():
+            if path.is_dir():
+                shutil.rmtree(path)
+            path.unlink(missing_ok=True)
+            build(path)
+            done.touch()
+    return path
+
+
 @pytest.fixture(scope="session")
-def fixture_database(tmp_path_factory) -> Path:
+def fixture_database(request: pytest.FixtureRequest) -> Path:
     """The fixture database (``build_fixture_database``), built once per test session."""
-    return build_fixture_database(tmp_path_factory.mktemp("report-fixture") / "fixture.sqlite")
+    return built_once(request, "fixture.sqlite", build_fixture_database)
 
 
 @pytest.fixture(scope="session")
-def fixture_report(fixture_database: Path, tmp_path_factory) -> Path:
+def fixture_report(fixture_database: Path, request: pytest.FixtureRequest) -> Path:
     """The report folder of the fixture database (``build_fixture_report``), built once per test session."""
-    return build_fixture_report(fixture_database, tmp_path_factory.mktemp("report-fixture-report"))
+    return built_once(request, "report-fixture-report",
+                      lambda folder: build_fixture_report(fixture_database, folder))

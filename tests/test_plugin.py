@@ -160,20 +160,43 @@ def test_selftest_checks_the_installed_plug_in(site: Path) -> None:
     assert "skip  stability limit" in result.stdout
 
 
-def test_the_project_suite_still_passes_with_the_plug_in_installed(site: Path) -> None:
-    """The tests that enumerate the registry or assert what the built-in matrices cover judge the built-ins only,
-    whatever plug-ins (here, ones that break what those tests check) are installed."""
-    probe = run(site, "-c", "from foucault_bench.integrators import REGISTRY; print(*REGISTRY)")
-    assert {"toy_midpoint", "toy_overclaimed", "toy_dopri", "toy_still"} <= set(probe.stdout.split()), probe.stderr
-    result = run(site, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/test_matrix.py",
-                 "tests/test_fixed_step.py", "tests/test_selftest.py", "tests/test_adaptive.py::test_declares_its_facts",
+PROJECT_TESTS = ("tests/test_matrix.py", "tests/test_fixed_step.py", "tests/test_selftest.py",
+                 "tests/test_adaptive.py::test_declares_its_facts",
                  "tests/test_adaptive.py::test_the_library_drivers_are_discovered", "tests/test_structure.py",
                  "tests/test_timing.py::test_every_built_in_integrator_says_how_its_cost_arises",
                  "tests/test_tableau.py::test_the_shipped_tableaux_are_the_expected_ones",
                  "tests/test_studies.py::test_stable_below_the_limit_and_blown_up_above_it",
                  "tests/test_studies.py::test_measured_limits_match_the_declared_ones_without_rotation",
-                 "tests/test_studies.py::test_rotation_growth_is_measured_beside_its_law", timeout=1800)
+                 "tests/test_studies.py::test_rotation_growth_is_measured_beside_its_law")
+"""The project's tests that enumerate the registry or assert what the built-in matrices cover."""
+
+
+def collected_tests(site: Path | None) -> list[str]:
+    """The ids of ``PROJECT_TESTS`` as pytest collects them, with the plug-ins of ``site`` installed or none."""
+    result = run(site, "-m", "pytest", "-q", "--collect-only", "-p", "no:cacheprovider", *PROJECT_TESTS)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-2000:]
+    return [line for line in result.stdout.splitlines() if "::" in line]
+
+
+def test_the_project_suite_still_passes_with_the_plug_in_installed(site: Path) -> None:
+    """The tests that enumerate the registry or assert what the built-in matrices cover judge the built-ins only,
+    whatever plug-ins (here, ones that break what those tests check) are installed: with them, pytest collects
+    the same tests (an enumeration by parametrization picks the built-ins only), and those tests pass. A test
+    given one built-in integrator by its parameters (its body reads that one, by name) is judged by the
+    collection alone here: the suite itself runs it."""
+    from foucault_bench.integrators import built_in_names
+
+    probe = run(site, "-c", "from foucault_bench.integrators import REGISTRY; print(*REGISTRY)")
+    assert {"toy_midpoint", "toy_overclaimed", "toy_dopri", "toy_still"} <= set(probe.stdout.split()), probe.stderr
+    tests = collected_tests(site)
+    assert tests == collected_tests(None)
+    built_in = set(built_in_names())
+    per_integrator = [test for test in tests if "[" in test and built_in & set(test.split("[", 1)[1][:-1].split("-"))]
+    assert per_integrator, "the per-integrator tests are told apart by their ids"
+    result = run(site, "-m", "pytest", "-q", "-p", "no:cacheprovider", *PROJECT_TESTS,
+                 *(f"--deselect={test}" for test in per_integrator), timeout=1800)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-2000:]
+    assert f"{len(per_integrator)} deselected" in result.stdout, result.stdout[-3000:]
 
 
 def test_selftest_judges_a_plug_in_that_overclaims(site: Path) -> None:
