@@ -1,0 +1,135 @@
+"""Real pendulums: the closed forms of the damped and the anisotropic linear pendulum against the real128
+reference (models/README.md "Drag and drive", "Anisotropic support"), the averaged precession of an anisotropic
+support against a numerical run, its locking, and the new models' energy facts."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from foucault_bench.bench.problems.reference import reference_for
+from foucault_bench.bench.problems.scenes import Scene
+from foucault_bench.models import MODELS, PendulumParameters
+from foucault_bench.models import analytic
+
+EPSILON = float(np.finfo(float).eps)
+LAB = PendulumParameters(length_m=3.0, latitude_deg=40.44, amplitude_m=0.15, release_azimuth_deg=20.0)
+STEPS_PER_PERIOD = 8
+
+pytestmark = pytest.mark.usefixtures("fresh_reference_cache")
+
+
+def reference_scene(model: str, params: PendulumParameters, periods: int) -> Scene:
+    period = params.small_swing_period_s
+    return Scene(name=f"test_{model}", title="test", model=model, params=params,
+                 duration_s=periods * period, output_interval_s=period / STEPS_PER_PERIOD, why_model="test",
+                 source="test")
+
+
+def roundoff_bound(params: PendulumParameters, duration_s: float) -> float:
+    """Position error / A from rounding the parameters to double: a relative ε in a frequency ω shifts the
+    phase by ε ω t, so the bound is a few ε times (1 + k t)."""
+    return 8.0 * EPSILON * (1.0 + params.pendulum_frequency_rad_s * duration_s)
+
+
+def position_error(closed_form: np.ndarray, reference_y: np.ndarray, amplitude_m: float) -> float:
+    return float(np.max(np.hypot(*(closed_form[:, :2] - reference_y[:, :2]).T)) / amplitude_m)
+
+
+def test_the_damped_closed_form_is_the_real128_reference_to_round_off() -> None:
+    params = dataclasses.replace(LAB, drag_linear_per_s=1.0e-3)
+    scene = reference_scene("damped_linear", params, periods=50)
+    reference = reference_for(scene)
+    closed = analytic.damped_linear_exact(params, reference.t)
+    assert position_error(closed, reference.y, params.amplitude_m) <= roundoff_bound(params, scene.duration_s)
+    speed_scale = params.amplitude_m * params.pendulum_frequency_rad_s
+    assert np.max(np.abs(closed[:, 2:] - reference.y[:, 2:])) / speed_scale <= roundoff_bound(params, scene.duration_s)
+    # the swing decays as e^{−γt/2}: the last turning point's radius, against it (a/k-sized ellipse aside)
+    last = reference.turning_points[-1]
+    expected_radius = params.amplitude_m * np.exp(-0.5 * params.drag_linear_per_s * last[0])
+    assert abs(np.hypot(last[1], last[2]) / expected_radius - 1.0) < 1e-6
+
+
+def test_the_damped_closed_form_is_the_linear_one_without_drag() -> None:
+    t = np.linspace(0.0, 600.0, 101)
+    assert np.allclose(analytic.damped_linear_exact(LAB, t), analytic.linear_exact(LAB, t), rtol=0, atol=1e-14)
+
+
+def test_the_anisotropic_closed_form_is_the_real128_reference_to_round_off() -> None:
+    params = dataclasses.replace(LAB, support_anisotropy=3.0e-5, anisotropy_axis_deg=60.0)
+    scene = reference_scene("anisotropic_linear", params, periods=400)
+    reference = reference_for(scene)
+    closed = analytic.anisotropic_linear_exact(params, reference.t)
+    assert position_error(closed, reference.y, params.amplitude_m) <= roundoff_bound(params, scene.duration_s)
+
+
+@pytest.mark.parametrize("epsilon, axis_deg", [(1.0e-4, 10.0), (1.0e-4, 110.0), (3.0e-4, 45.0)])
+def test_the_averaged_swing_azimuth_follows_the_reference_turning_points(epsilon: float, axis_deg: float) -> None:
+    """The averaging neglects terms of relative size ε and a/k: the azimuth of each turning point may differ
+    from the averaged one by at most ε + a/k (rad) over a duration short of 1/(k(ε² + (a/k)²))."""
+    params = dataclasses.replace(LAB, support_anisotropy=epsilon, anisotropy_axis_deg=axis_deg)
+    reference = reference_for(reference_scene("anisotropic_linear", params, periods=400))
+    times, x, y = reference.turning_points.T
+    predicted = analytic.anisotropic_swing_azimuth_rad(params, times)
+    measured = 0.5 * np.unwrap(2.0 * np.arctan2(y, x))
+    measured += np.pi * np.round((predicted[0] - measured[0]) / np.pi)  # the swing's two ends are one axis
+    allowed = epsilon + params.vertical_rate_rad_s / params.pendulum_frequency_rad_s
+    assert np.max(np.abs(predicted - measured)) <= allowed
+    # and it is not the textbook azimuth: the anisotropy's effect is far above the allowance
+    textbook = np.radians(params.release_azimuth_deg) - params.vertical_rate_rad_s * times
+    assert np.max(np.abs(textbook - measured)) > 3.0 * allowed
+
+
+def fast_rotation(release_azimuth_deg: float) -> PendulumParameters:
+    """A rotation fast enough (a = 0.01 k at 40.44°) for the slow motion to close within 50 swings, and a
+    support with δ = kε/2 = 2a."""
+    k = LAB.pendulum_frequency_rad_s
+    earth_rate = 0.01 * k / np.sin(np.radians(LAB.latitude_deg))
+    return dataclasses.replace(LAB, earth_rate_rad_s=earth_rate, support_anisotropy=0.04, anisotropy_axis_deg=20.0,
+                               release_azimuth_deg=release_azimuth_deg)
+
+
+@pytest.mark.parametrize("offset_deg, turning", [(0.0, False), (45.0, True), (40.0, True), (20.0, False)])
+def test_the_plane_locks_or_turns_at_the_derived_mean_rate(offset_deg: float, turning: bool) -> None:
+    """Released at β − ψ₀ with |δ cos 2(β − ψ₀)| < |a| the plane keeps turning, at the mean rate −√(a² + δ²);
+    otherwise it rocks about a fixed direction (mean rate 0). Measured on the exact solution (itself checked
+    against the reference above) over two whole turns of the slow motion, as the major axis of the swing's
+    ellipse; the averaged rate's error is of relative size ε + a/k."""
+    params = fast_rotation(release_azimuth_deg=20.0 + offset_deg)  # the stiff axis is at β = 20°
+    a = params.vertical_rate_rad_s
+    delta = analytic.anisotropy_coupling_rad_s(params)
+    assert bool(abs(delta * np.cos(np.radians(2.0 * offset_deg))) < abs(a)) is turning
+    mu = np.hypot(a, delta)
+    k = params.pendulum_frequency_rad_s
+    times = np.linspace(0.0, 2.0 * np.pi / mu, 4001)  # two whole turns of the slow motion, 10 samples a swing
+    x, y, vx, vy = analytic.anisotropic_linear_exact(params, times).T
+    # the major axis of the swing's ellipse: the leading eigenvector of r rᵀ + ṙ ṙᵀ/k²
+    axis = 0.5 * np.unwrap(np.arctan2(2.0 * (x * y + vx * vy / k**2), x * x - y * y + (vx * vx - vy * vy) / k**2))
+    mean_rate = (axis[-1] - axis[0]) / times[-1]
+    expected = analytic.anisotropic_precession_rate_rad_s(params)
+    assert bool(expected != 0.0) is turning
+    allowance = (params.support_anisotropy + a / k) * mu
+    assert abs(mean_rate - expected) <= allowance
+    if turning:
+        assert abs(mean_rate + a) > 3.0 * allowance  # faster than the Coriolis rate alone
+
+
+def test_the_release_rate_is_the_coriolis_rate_whatever_the_support() -> None:
+    params = dataclasses.replace(LAB, support_anisotropy=1e-4, anisotropy_axis_deg=10.0)
+    t = np.array([0.0, 1e-3])
+    rate = np.diff(analytic.anisotropic_swing_azimuth_rad(params, t))[0] / 1e-3
+    assert abs(rate + params.vertical_rate_rad_s) < 1e-3 * params.vertical_rate_rad_s
+
+
+def test_the_new_models_declare_their_energy_facts() -> None:
+    assert MODELS["anisotropic_linear"].conserves_energy and MODELS["anisotropic_linear"].hamiltonian
+    assert MODELS["anisotropic_spherical"].conserves_energy and MODELS["anisotropic_spherical"].hamiltonian
+    for name in ("damped_linear", "driven_linear"):
+        assert not MODELS[name].conserves_energy and not MODELS[name].hamiltonian
+    # each equals its parent at the defaults and not at its example parameters
+    for name in ("anisotropic_linear", "anisotropic_spherical", "damped_linear", "driven_linear"):
+        model = MODELS[name]
+        assert model.equals_parents_at(LAB)
+        assert not model.equals_parents_at(model.with_example_parameters(LAB))
