@@ -7,7 +7,7 @@ a built-in one (``base = "pantheon"``).
 
 How the built-in scenes were chosen:
 
-* **Model.** The simplest model of the hierarchy (models/README.md "The three models": linear < seed's planar
+* **Model.** The simplest model of the hierarchy (models/README.md "The models": linear < seed's planar
   < spherical) that resolves the precession rate to the precision its source quotes it. The linear model neglects
   the Airy precession (3/8)θ₀² (θ₀ = A/L), the release-side term ≈ ¼θ₀³cot φ and the centrifugal anisotropy; a
   scene is linear when these stay well below the rounding of the quoted rate, spherical otherwise. Each scene's
@@ -147,7 +147,7 @@ def physical_limit_problems(params: PendulumParameters) -> list[str]:
       whose plane Earth turns slowly: by π Ω sin φ / k per swing. At Ω ≥ k that is up to half a turn or more per
       swing, so there is no swing plane whose turning points the precession measurement could follow
       (``bench.verdicts.turning_points``), and the terms of relative size (Ω/k)² that the planar models drop
-      (models/README.md "The three models") are of order one. Earth's Ω_E/k is 10⁻⁵-10⁻⁴ for real pendulums.
+      (models/README.md "The models") are of order one. Earth's Ω_E/k is 10⁻⁵-10⁻⁴ for real pendulums.
     * **The bob stays below the pivot's height.** The spherical model's coordinates end there (z = −√(L² − x²
       − y²), ``models.spherical``), a string can go slack above it, and the planar models approximate the
       spherical one. The spherical model conserves its Jacobi integral h = ½|ṙ|² + g z − (c/2)|ω×r|² exactly;
