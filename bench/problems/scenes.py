@@ -29,7 +29,9 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+import tomllib
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
@@ -526,3 +528,16 @@ def _builtin_scenes() -> dict[str, Scene]:
 
 SCENES: dict[str, Scene] = _builtin_scenes()
 """The built-in scenes by name (insertion order: the order reports list them)."""
+
+SCENE_FILES_DIRECTORY = Path(__file__).resolve().parents[1] / "scenes"
+"""Built-in scenes written as TOML files (``bench/scenes/NAME.toml``, ``[scene.NAME]`` tables)."""
+
+
+def scenes_from_file(path: Path) -> dict[str, Scene]:
+    """The ``[scene.NAME]`` tables of a TOML file, each read by ``scene_from_mapping`` (other tables ignored)."""
+    with open(path, "rb") as handle:
+        tables = tomllib.load(handle).get("scene", {})
+    return {name: scene_from_mapping(name, mapping) for name, mapping in tables.items()}
+
+
+SCENES.update(scenes_from_file(SCENE_FILES_DIRECTORY / "real_halls.toml"))
