@@ -186,3 +186,65 @@ def test_the_balance_of_the_reference_closes_and_a_coarse_run_does_not(model_nam
     assert energy_balance_max_rel_error(model, params, run.t, run.y, *scale) > 100.0 * floor
     change = np.max(np.abs(energy_history(model_name, params, reference.y) - scale[0])) / scale[1]
     assert change > 100.0 * floor
+
+
+# --- the report's table "against the measurement" (reports/halls.py) ----------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def halls_database(tmp_path_factory):
+    """A database of a tiny matrix on the Guelph scenes (one adaptive integrator, two tolerances)."""
+    from foucault_bench.bench.cli import main
+
+    folder = tmp_path_factory.mktemp("halls")
+    matrix = folder / "tiny_halls.toml"
+    matrix.write_text('name = "tiny_halls"\nscenes = ["guelph", "guelph_support"]\nintegrators = ["dop853"]\n'
+                      'tol = [1e-6, 1e-10]\n[timing]\nmin_repeats = 1\nmin_total_s = 0.0\nmax_repeats = 1\n')
+    database = folder / "halls.sqlite"
+    assert main(["run", "--matrix", str(matrix), "--db", str(database), "--jobs", "1", "--no-progress"]) == 0
+    return database
+
+
+def test_the_table_against_the_measurement_is_recomputed_from_the_rows(halls_database) -> None:
+    import sqlite3
+    import tomllib
+
+    from foucault_bench.bench.run.store import ResultsStore
+    from foucault_bench.reports import halls
+
+    with ResultsStore(halls_database) as store:
+        table = halls.against_measurement(store.frame())
+    with open(halls.HALLS_FILE, "rb") as handle:
+        measured = tomllib.load(handle)["measurement"]["guelph"]
+    with sqlite3.connect(halls_database) as connection:
+        def best(scene: str) -> float:
+            rate, = connection.execute(
+                "SELECT precession_rate_rad_s FROM runs WHERE scene = ? AND status = 'ok' "
+                "ORDER BY precession_rate_ref_error_rad_s LIMIT 1", (scene,)).fetchone()
+            return -rate * 180.0 / np.pi * 3600.0
+        ideal, effect = best("guelph"), best("guelph_support")
+    row = table.set_index("hall").loc["guelph"]
+    assert list(table["hall"]) == ["guelph"]  # Motala has no runs here
+    assert row["measured_deg_h"] == measured["measured_deg_h"]
+    assert row["ideal_deg_h"] == pytest.approx(ideal, rel=1e-12)
+    assert row["with_effect_deg_h"] == pytest.approx(effect, rel=1e-12)
+    # the long-time mean, recomputed from the closed form's statement: √(a² + (kε/2)²) while the plane turns
+    params = SCENES_OF_FILE["guelph_support"].params
+    a = params.vertical_rate_rad_s
+    delta = 0.5 * params.pendulum_frequency_rad_s * params.support_anisotropy
+    assert row["with_effect_long_time_deg_h"] == pytest.approx(np.hypot(a, delta) * 180.0 / np.pi * 3600.0, rel=1e-12)
+    assert bool(row["ideal_inside"]) == (measured["low_deg_h"] <= ideal <= measured["high_deg_h"])
+    # the ideal prediction is the textbook 10.36°/h the source predicts, to its rounding
+    assert abs(ideal - 10.36) < 0.005
+    note = halls.closing_note(table)
+    assert f"{ideal:.2f}°/h lies {'inside' if row['ideal_inside'] else 'outside'}" in note
+
+
+SCENES_OF_FILE = {}
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _scenes_of_file():
+    from foucault_bench.bench.problems.scenes import SCENE_FILES_DIRECTORY, scenes_from_file
+
+    SCENES_OF_FILE.update(scenes_from_file(SCENE_FILES_DIRECTORY / "real_halls.toml"))
