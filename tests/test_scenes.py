@@ -16,7 +16,8 @@ import foucault_bench.bench.problems.reference as reference_module
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.reference import CACHE_ENVIRONMENT_VARIABLE, cache_directory, load_cached, reference_for, reference_key
 from foucault_bench.bench.problems.scenes import (
-    MAX_SCENE_NAME_LENGTH, MIN_OUTPUT_INTERVALS_PER_PERIOD, SCENES, scene_from_mapping,
+    MAX_SCENE_NAME_LENGTH, MIN_OUTPUT_INTERVALS_PER_PERIOD, SCENE_FILES_DIRECTORY, SCENES, scene_from_mapping,
+    scenes_from_file,
 )
 from foucault_bench.models import MODELS
 
@@ -40,7 +41,8 @@ def problems_of(name: str, mapping: dict) -> list[str]:
 
 def test_the_built_in_scenes_are_the_ones_promised() -> None:
     north_south = {"lab_3m_ns", "quito_3m_ns"}
-    assert set(REAL_PENDULUMS) | {"airy_3m", "seed_2min"} | north_south == set(SCENES)
+    from_files = set(scenes_from_file(SCENE_FILES_DIRECTORY / "real_halls.toml"))  # bench/scenes/real_halls.toml
+    assert set(REAL_PENDULUMS) | {"airy_3m", "seed_2min"} | north_south | from_files == set(SCENES)
     for name in north_south:  # released towards the South, on the model that has the horizontal part of ω
         assert SCENES[name].params.release_azimuth_deg == 0.0 and SCENES[name].model == "spherical"
     assert abs(SCENES["quito_3m_ns"].params.latitude_deg) < 1.0 < SCENES["lab_3m_ns"].params.latitude_deg
