@@ -49,7 +49,7 @@ def power_per_kg(model: Model, params: PendulumParameters, states: np.ndarray) -
     z, vz = _heights(model, params, x, y, vx, vy)
     remainder = model.numba_remainder
     p = params.parameter_vector()
-    forces = np.array([remainder(*row, p) for row in zip(x, y, z, vx, vy, vz)], dtype=np.float64).reshape(-1, 3)
+    forces = np.array([remainder(*row, p) for row in zip(x, y, z, vx, vy, vz, strict=True)], dtype=np.float64).reshape(-1, 3)
     return vx * forces[:, 0] + vy * forces[:, 1] + vz * forces[:, 2]
 
 
