@@ -248,3 +248,43 @@ def _scenes_of_file():
     from foucault_bench.bench.problems.scenes import SCENE_FILES_DIRECTORY, scenes_from_file
 
     SCENES_OF_FILE.update(scenes_from_file(SCENE_FILES_DIRECTORY / "real_halls.toml"))
+
+
+# --- the ellipse verdicts (bench/verdicts/ellipse.py) --------------------------------------------------------------
+
+
+def test_the_linear_model_keeps_its_canonical_angular_momentum_and_its_narrow_ellipse() -> None:
+    """On the exact linear solution ℓ_c = xẏ − yẋ + a r² stays at its release value aA² to round-off (the model
+    is symmetric about the vertical), and the osculating ellipse is the narrow one of models/README.md "Closed
+    forms", semi-minor axis (a/Ω)A, to the relative (a/k)² by which Ω differs from the k the formula uses."""
+    from foucault_bench.bench.verdicts.ellipse import canonical_angular_momentum, semi_minor_axis
+
+    t = np.linspace(0.0, 3600.0, 20_001)
+    exact = analytic.linear_exact(LAB, t)
+    a, k, amplitude = LAB.vertical_rate_rad_s, LAB.pendulum_frequency_rad_s, LAB.amplitude_m
+    momentum = canonical_angular_momentum(LAB, exact)
+    assert np.max(np.abs(momentum - a * amplitude**2)) <= 1e3 * EPSILON * k * amplitude**2
+    big_omega = np.hypot(k, a)
+    assert np.max(np.abs(semi_minor_axis(LAB, exact) / ((a / big_omega) * amplitude) - 1.0)) <= 10.0 * (a / k) ** 2
+
+
+def test_an_anisotropic_support_changes_the_ellipse_by_what_the_averaged_theory_says() -> None:
+    """Against the isotropic swing, the support's swing differs in its canonical angular momentum by the
+    ellipse it builds: to first order in δt, the semi-minor axis grows as A δ t |sin 2(β − ψ₀)| (ln(|w|/|u|)
+    grows at 2δ sin 2(β − ψ₀), the docstring of ``anisotropic_swing_azimuth_rad``), far above the isotropic one."""
+    from foucault_bench.bench.verdicts.ellipse import ellipse_errors, semi_minor_axis
+
+    params = dataclasses.replace(LAB, support_anisotropy=2e-4, anisotropy_axis_deg=0.0, release_azimuth_deg=45.0)
+    delta = analytic.anisotropy_coupling_rad_s(params)
+    t = np.linspace(0.0, 60.0, 601)
+    support = analytic.anisotropic_linear_exact(params, t)
+    isotropic = analytic.linear_exact(dataclasses.replace(params, support_anisotropy=0.0), t)
+    grown = semi_minor_axis(params, support[-1:])[0]
+    expected = params.amplitude_m * delta * t[-1]
+    assert abs(grown / expected - 1.0) < 0.05  # δt = 0.05 here: second-order terms and the a/k ellipse
+    errors = ellipse_errors(params, support, isotropic)
+    assert errors["semi_minor_axis_ref_error"] == pytest.approx(np.max(np.abs(
+        semi_minor_axis(params, support) - semi_minor_axis(params, isotropic))) / params.amplitude_m)
+    assert errors["semi_minor_axis_ref_error"] > 0.5 * delta * t[-1]
+    assert ellipse_errors(params, support, support) == {"canonical_angular_momentum_ref_error": 0.0,
+                                                        "semi_minor_axis_ref_error": 0.0}

@@ -20,6 +20,8 @@ comparison is fair and the numbers are deterministic (same inputs → same bits 
   reference's rate measured the same way on the same grid.
 * **Trajectory**: max over the grid of |r − r_other|/A against the exact linear solution, the seed's
   approximate solution (``models.analytic``) and the reference.
+* **Ellipse** (``bench.verdicts.ellipse``): the canonical angular momentum about the vertical and the semi-minor
+  axis of the swing's osculating ellipse, against the reference.
 * **Convergence** (``observed_order``): the order seen in a sweep of step sizes.
 
 Turning points streamed by some integrators (``Solution.streamed``) are not used for the verdicts: one
@@ -34,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from foucault_bench.bench.schema import VERDICT_COLUMNS
+from foucault_bench.bench.verdicts.ellipse import ellipse_errors
 from foucault_bench.bench.verdicts.energy_balance import energy_balance_max_rel_error
 from foucault_bench.bench.verdicts.turning_points import (
     finite_prefix,
@@ -161,6 +164,7 @@ def compute_verdicts(scene: "Scene", solution: Solution, reference: "Reference |
         verdicts["analytic_gap_seed"] = max_position_gap(y, seed_approximate(params, t), amplitude)
     if reference is not None:
         verdicts["reference_error"] = max_position_gap(y, reference.y, amplitude)
+        verdicts.update(ellipse_errors(params, y, reference.y))
     if not model.conserves_energy:
         verdicts["energy_balance_max_rel_error"] = energy_balance_max_rel_error(model, params, t, y,
                                                                                  *energy_scale(model, params))
