@@ -288,3 +288,29 @@ def test_an_anisotropic_support_changes_the_ellipse_by_what_the_averaged_theory_
     assert errors["semi_minor_axis_ref_error"] > 0.5 * delta * t[-1]
     assert ellipse_errors(params, support, support) == {"canonical_angular_momentum_ref_error": 0.0,
                                                         "semi_minor_axis_ref_error": 0.0}
+
+
+# --- model adequacy with the new effects (bench/problems/adequacy.py) ----------------------------------------------
+
+
+def test_adequacy_compares_an_effect_only_where_a_scene_sets_it() -> None:
+    """A scene of the anisotropic support gets the row "linear vs anisotropic_linear", recomputed here from the two
+    references; the ideal scene of the same hall gets no row for any new model (their parameters are at the
+    defaults, where each equals its parent)."""
+    from foucault_bench.bench.problems.adequacy import model_adequacy
+    from foucault_bench.bench.verdicts.turning_points import rate_scale
+
+    hall = SCENES_OF_FILE["guelph_support"]
+    short_s = 512 * hall.output_interval_s  # about 2 minutes, a whole number of the scene's output intervals
+    support = dataclasses.replace(hall, name="guelph_support_short", duration_s=short_s)
+    rows = model_adequacy(support)
+    assert [(row["simpler_model"], row["model"]) for row in rows] == [("linear", "anisotropic_linear")]
+    linear = reference_for(dataclasses.replace(support, model="linear", name="guelph_support_short.linear"))
+    own = reference_for(support)
+    expected = (linear.precession_rate_rad_s - own.precession_rate_rad_s) / rate_scale(support.params)
+    assert rows[0]["precession_rate_diff"] == pytest.approx(expected, rel=1e-12)
+    assert rows[0]["trajectory_gap"] == pytest.approx(position_error(linear.y, own.y, support.params.amplitude_m),
+                                                      rel=1e-12)
+    ideal = dataclasses.replace(SCENES_OF_FILE["guelph"], name="guelph_short", duration_s=short_s)
+    new_models = {"anisotropic_linear", "anisotropic_spherical", "damped_linear", "driven_linear"}
+    assert not [row for row in model_adequacy(ideal) if {row["model"], row["simpler_model"]} & new_models]
