@@ -65,6 +65,9 @@ COLUMNS: tuple[Column, ...] = (
     Column("analytic_gap_exact", "REAL", "", "max |r − r_exact linear| / A over the output grid"),
     Column("analytic_gap_seed", "REAL", "", "max |r − r_seed eqs. 14-15| / A over the output grid"),
     Column("reference_error", "REAL", "", "max |r − r_reference| / A over the output grid (real128 heyoka reference)"),
+    Column("energy_balance_max_rel_error", "REAL", "", "models that conserve no energy only (NULL otherwise): max over the output grid of |E − E₀ − W|/(E₀ − E_rest), W the work of drag and drive integrated along the run (bench/verdicts/energy_balance.py)"),
+    Column("canonical_angular_momentum_ref_error", "REAL", "", "max |ℓ_c − ℓ_c,ref| / (k A²) over the output grid, ℓ_c = xẏ − yẋ + Ω_E sin φ (x² + y²) the canonical angular momentum about the vertical (bench/verdicts/ellipse.py)"),
+    Column("semi_minor_axis_ref_error", "REAL", "", "max |b_e − b_e,ref| / A over the output grid, b_e the semi-minor axis of the osculating small-swing ellipse (bench/verdicts/ellipse.py)"),
     # cost
     Column("cpu_time_s", "REAL", "s", "median CPU time of the worker thread over the timed repeats (compile excluded): the cost the charts and tables use, independent of machine load and --jobs"),
     Column("cpu_time_spread_s", "REAL", "s", "max − min of the timed repeats' CPU times (0 with a single repeat: a warm-up over single_repeat_over_s, or a first repeat that alone reaches min_total_s when min_repeats = 1)"),
@@ -98,6 +101,9 @@ VERDICT_COLUMNS: tuple[str, ...] = (
     "analytic_gap_exact",
     "analytic_gap_seed",
     "reference_error",
+    "energy_balance_max_rel_error",
+    "canonical_angular_momentum_ref_error",
+    "semi_minor_axis_ref_error",
 )
 """Accuracy columns: deterministic, identical bit for bit for the same matrix on the same machine."""
 
@@ -110,7 +116,7 @@ DECLARED_FACTS: dict[str, str] = {
 }
 """Results column → the ``integrators.Integrator`` class attribute it stores."""
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 """Version of ``COLUMNS`` (stored as the database's ``PRAGMA user_version``)."""
 SCENE_KEY_MIGRATION = (
     "runs and adequacy rows lack scene_key: added, and filled for the old rows of a built-in scene (or its "
@@ -120,11 +126,17 @@ SCENE_KEY_MIGRATION = (
     "results --compare only with rows of unknown physics"
 )
 MIGRATIONS: dict[int, str] = {
-    1: "runs lack the declared integrator facts (declared_order, stages, adaptive, stability_limit_kh) and the "
+    1: "runs lack energy_balance_max_rel_error, canonical_angular_momentum_ref_error and "
+       "semi_minor_axis_ref_error (added as NULL), the declared integrator facts (declared_order, "
+       "stages, adaptive, stability_limit_kh) and the "
        "precession errors in rad/s and relative to Ω_E (precession_rate_error_rad_s, _earth, "
        "precession_rate_ref_error_rad_s, _earth): added as NULL columns, unknown for the old rows; and, as for "
        "version 2, " + SCENE_KEY_MIGRATION,
-    2: SCENE_KEY_MIGRATION,
+    2: "runs lack energy_balance_max_rel_error, canonical_angular_momentum_ref_error and "
+       "semi_minor_axis_ref_error (added as NULL); and " + SCENE_KEY_MIGRATION,
+    3: "runs lack energy_balance_max_rel_error (the energy balance of models that conserve no energy), "
+       "canonical_angular_momentum_ref_error and semi_minor_axis_ref_error (the swing's ellipse against the "
+       "reference): added as NULL columns, unknown for the old rows",
 }
 """Older schema version → what a database written under it lacks (the store adds the missing columns)."""
 

@@ -68,6 +68,15 @@ class PendulumParameters:
             The seed releases at y = y₀, that is 90°.
         release_velocity_m_s: initial horizontal velocity (ẋ, ẏ) in the rotating frame (m/s); the seed's is 0.
         centrifugal: keep the centrifugal force −ω×(ω×r) in the spherical model (the planar models have none).
+        support_anisotropy: ε, the support's relative frequency split: small-swing frequencies k(1 ± ε/2) along
+            and across its stiff axis (models ``anisotropic_linear``, ``anisotropic_spherical``); 0 (the default):
+            an isotropic support.
+        anisotropy_axis_deg: β, azimuth of the stiff axis (frequency k(1 + ε/2)), from South towards East, degrees.
+        drag_linear_per_s: γ, linear (viscous) drag −γ ṙ per unit mass (1/s; ``damped_linear``); 0: none.
+        drag_quadratic_per_m: c, quadratic air drag −c |ṙ| ṙ per unit mass (1/m; ``damped_linear``); 0: none.
+        drive_gain_per_s: κ, gain of the drive near the centre, +κ ṙ / (1 + |r|²/r_d²) per unit mass (1/s;
+            ``driven_linear``); 0: no drive.
+        drive_radius_m: r_d, the radius (m) of the region round the centre where the drive acts.
     """
 
     length_m: float = field(metadata=rule(lambda v, p: v > 0, "must be > 0 (the string length in m)"))
@@ -81,6 +90,13 @@ class PendulumParameters:
     release_velocity_m_s: tuple[float, float] = field(default=(0.0, 0.0),
                                                       metadata=rule(kind="pair"))
     centrifugal: bool = field(default=True, metadata=rule(kind="bool"))
+    support_anisotropy: float = field(default=0.0, metadata=rule(lambda v, p: 0.0 <= v < 1.0, "must lie in [0, 1)",
+                                                                 unit="1"))
+    anisotropy_axis_deg: float = field(default=0.0, metadata=rule(unit="deg"))
+    drag_linear_per_s: float = field(default=0.0, metadata=rule(lambda v, p: v >= 0, "must be >= 0", unit="1/s"))
+    drag_quadratic_per_m: float = field(default=0.0, metadata=rule(lambda v, p: v >= 0, "must be >= 0", unit="1/m"))
+    drive_gain_per_s: float = field(default=0.0, metadata=rule(lambda v, p: v >= 0, "must be >= 0", unit="1/s"))
+    drive_radius_m: float = field(default=0.1, metadata=rule(lambda v, p: v > 0, "must be > 0", unit="m"))
 
     def __post_init__(self) -> None:
         for spec in fields(self):

@@ -43,7 +43,7 @@ from foucault_bench.bench.verdicts.pareto import (
 from foucault_bench.integrators import REGISTRY, STATUS_OK
 from foucault_bench.integrators.base import COST_COMPILED, COST_PYTHON_DRIVEN
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
-from foucault_bench.reports import charts, interactive, tables
+from foucault_bench.reports import charts, halls, interactive, tables
 from foucault_bench.reports.document import (
     Block,
     Figure,
@@ -514,6 +514,7 @@ def build_report(inputs: ReportInputs, folder: Path, title: str = "foucault-benc
     _convergence(builder, inputs.runs)
     _studies(builder, inputs.studies)
     _adequacy(builder, inputs.adequacy)
+    halls.add_section(builder, inputs.runs)
     if inputs.include_seed:
         builder.add(*seed_blocks(folder, "seed"))
     _all_runs(builder, inputs.runs)

@@ -12,7 +12,7 @@ import pytest
 from foucault_bench.bench.cli import main as cli_main
 from foucault_bench.bench.problems.scene_key import scene_key
 from foucault_bench.bench.run.matrix import parse_matrix
-from foucault_bench.bench.schema import COLUMN_NAMES
+from foucault_bench.bench.schema import COLUMN_NAMES, SCHEMA_VERSION
 from foucault_bench.bench.run.compare import compare_runs
 from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.run.summary import summarize
@@ -275,7 +275,7 @@ def test_a_version_2_database_gets_the_scene_keys_its_run_keys_prove(tmp_path):
     connection.close()
 
     with ResultsStore(path, create=False) as store:
-        assert store.schema_version == 3
+        assert store.schema_version == SCHEMA_VERSION  # migrated to the present version
         rows = store.frame()
         adequacy = store.adequacy()
     expected = {}

@@ -43,6 +43,10 @@ SEED_EARTH_RATE_RAD_S = 2.0 * math.pi / (24.0 * 3600.0)
 ``seed_2min`` writes it out (tests/test_scenes.py checks that the two are the same double)."""
 
 
+SCENE_FILE_TABLES = ("scene", "measurement")
+"""The top-level tables of a scene file: scenes, and the measured rates of real halls (``reports.halls``)."""
+
+
 def load_scene_files(paths: Iterable[Path]) -> dict[str, Scene]:
     """Every scene of the scene files ``paths``, read in the order given, each file's scenes in its order.
 
@@ -53,8 +57,9 @@ def load_scene_files(paths: Iterable[Path]) -> dict[str, Scene]:
     taken: dict[str, str] = {}
     for path in paths:
         document, source, _ = read_toml(path, folder=SCENE_DIRECTORY.name, kind="scenes")
-        problems: list[str] = [f"{source}: unknown key {short_repr(key)}; a scene file holds only [scene.NAME] "
-                               "tables" for key in document if key != "scene"]
+        problems: list[str] = [f"{source}: unknown key {short_repr(key)}; a scene file holds [scene.NAME] tables "
+                               "and, for real halls, [measurement.NAME] tables (their measured rates, read by the "
+                               "report)" for key in document if key not in SCENE_FILE_TABLES]
         loaded = read_scene_tables(document.get("scene", {}), scenes, taken,
                                    functools.partial(_add_problem, problems, source))
         if problems:

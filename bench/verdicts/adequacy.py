@@ -1,6 +1,6 @@
 """Model adequacy: what a scene would get wrong with another model of the hierarchy, measured, not argued.
 
-The models form a hierarchy (models/README.md "The three models") that each model declares (``Model.refines``;
+The models form a hierarchy (models/README.md "The models") that each model declares (``Model.refines``;
 ``models.simpler_models``, ``models.richer_models``): today linear planar (seed eqs. 6-7) < the seed's nonlinear
 planar (eqs. 4-5) < the spherical pendulum with the full rotation vector. For a scene, every pair of models in
 which the scene's model takes part is integrated with the reference integrator on the scene's grid (each run is a

@@ -9,7 +9,10 @@ comparison is fair and the numbers are deterministic (same inputs → same bits 
   swing above the bob at rest at the bottom (E_rest = E(0, 0, 0, 0)), so that the figure does not depend on
   where the potential's zero lies: for the planar models E_rest = 0 and E_swing = E₀; for the spherical model
   E₀ ≈ −gL while E_swing ≈ gA²/2L, and dividing by |E₀| would make the same error look 2/θ₀² times smaller.
-  Reported: max |·|, least-squares slope in t, and the streamed per-step max rescaled to E_swing.
+  Reported: max |·|, least-squares slope in t, and the streamed per-step max rescaled to E_swing. For a model
+  that conserves no energy (drag, drive, the seed's eqs. 4-5) the energy balance E − E₀ − W, W the work of its
+  non-conservative forces along the run, replaces it as the integrator's energy error
+  (``bench.verdicts.energy_balance``, column ``energy_balance_max_rel_error``).
 * **Precession** (``turning_points_from_grid``, ``precession_rate``): turning points of the swing (maxima of
   the radius) located on a local Hermite interpolant of the grid (positions, velocities, and accelerations
   from the model), their azimuths ψ unwrapped as 2ψ, halved, and fitted by a straight line in t
@@ -17,6 +20,8 @@ comparison is fair and the numbers are deterministic (same inputs → same bits 
   reference's rate measured the same way on the same grid.
 * **Trajectory**: max over the grid of |r − r_other|/A against the exact linear solution, the seed's
   approximate solution (``models.analytic``) and the reference.
+* **Ellipse** (``bench.verdicts.ellipse``): the canonical angular momentum about the vertical and the semi-minor
+  axis of the swing's osculating ellipse, against the reference.
 * **Convergence** (``observed_order``): the order seen in a sweep of step sizes.
 
 Turning points streamed by some integrators (``Solution.streamed``) are not used for the verdicts: one
@@ -31,6 +36,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from foucault_bench.bench.schema import VERDICT_COLUMNS
+from foucault_bench.bench.verdicts.ellipse import ellipse_errors
+from foucault_bench.bench.verdicts.energy_balance import energy_balance_max_rel_error
 from foucault_bench.bench.problems.turning_points import (
     finite_prefix,
     grid_accelerations,
@@ -157,6 +164,10 @@ def compute_verdicts(scene: "Scene", solution: Solution, reference: "Reference |
         verdicts["analytic_gap_seed"] = max_position_gap(y, seed_approximate(params, t), amplitude)
     if reference is not None:
         verdicts["reference_error"] = max_position_gap(y, reference.y, amplitude)
+        verdicts.update(ellipse_errors(params, y, reference.y))
+    if not model.conserves_energy:
+        verdicts["energy_balance_max_rel_error"] = energy_balance_max_rel_error(model, params, t, y,
+                                                                                 *energy_scale(model, params))
     if solution.status == STATUS_OK:
         points = turning_points_from_grid(t, y, grid_accelerations(model, params, y), released_from_rest(params))
         rate, stderr = precession_rate(points)
