@@ -11,7 +11,8 @@ Qᵢ = q + h Σⱼ aᵢⱼ Vⱼ, Vᵢ = v + h Σⱼ aᵢⱼ A(Qⱼ, Vⱼ) with V
 v + h Σᵢ bᵢ A(Qᵢ, Vᵢ) (Hairer, Nørsett & Wanner, Solving ODEs I, §II.1, eq. (1.8)).
 
 Operation order: a row whose coefficients are fractions with a small common denominator D (every classical
-method's) is computed as (h / D) · (n₁k₁ + n₂k₂ + …) with integer numerators, summed left to right, and terms with
+method's) is computed as (h / D) · (n₁k₁ + n₂k₂ + …) with integer numerators (each h / D once per step, at the
+top, as the C reference computes it), summed left to right, and terms with
 a zero coefficient left out; other rows as h · (a₁k₁ + a₂k₂ + …). For explicit Euler and RK4 this is, operation for
 operation, the arithmetic of the hand-written steps they had (multiplications by 1, 2 and ½ are exact), so their
 results are bitwise the same (tests/test_fixed_step.py).
@@ -51,7 +52,7 @@ def _combination(base: str, terms: list[str], coefficients: tuple[float, ...]) -
                 for term, weight in zip(terms, weights, strict=True) if weight != 0.0]
     if not products:
         return base
-    scale = "h" if denominator == 1 else f"(h / {float(denominator)!r})"
+    scale = "h" if denominator == 1 else f"h_over_{denominator}"
     single_term = len(products) == 1 and " " not in products[0]
     total = products[0] if single_term else f"({' + '.join(products)})"
     return f"{base} + {scale} * {total}"
@@ -83,6 +84,9 @@ def step_source(tableau: ButcherTableau) -> str:
     updated = [_combination(base, terms, weights) for base, terms in
                (("x", velocity_x), ("y", velocity_y), ("vx", accel_x), ("vy", accel_y))]
     lines += [f"        return {', '.join(updated)}", "    return step"]
+    scales = sorted({int(name[len("h_over_"):]) for line in lines for name in line.replace("(", " ").split()
+                     if name.startswith("h_over_")})
+    lines[2:2] = [f"        h_over_{denominator} = h / {float(denominator)!r}" for denominator in scales]
     return "\n".join(lines) + "\n"
 
 
