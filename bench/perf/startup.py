@@ -38,7 +38,7 @@ tol = [1e-8]
 
 [timing]
 min_repeats = 1
-min_total_s = 0.05
+max_total_s = 0.05
 max_repeats = 3
 """
 PIECES = ("command-line module", "imports of the runner, matrix and store", "matrix validation",

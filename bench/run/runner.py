@@ -40,6 +40,7 @@ from __future__ import annotations
 import collections
 import contextlib
 import importlib
+import json
 import math
 import numbers
 import os
@@ -53,6 +54,7 @@ from tqdm import tqdm
 
 from foucault_bench.bench.errors import RunInterrupted
 from foucault_bench.bench.problems.scene_key import scene_key
+from foucault_bench.bench.run.calibration import calibration_cpu_s
 from foucault_bench.bench.run.executors import WORKER_DIED, DaskExecutor, LocalExecutor, make_executor
 from foucault_bench.bench.run.timing import limit_threads, peak_rss_mb, time_repeated
 from foucault_bench.bench.run.worker import describe
@@ -203,7 +205,9 @@ def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
         if timing is not None:
             row.update(cpu_time_s=timing.cpu_median_s, cpu_time_spread_s=timing.cpu_spread_s,
                        wall_time_s=timing.median_s, wall_time_spread_s=timing.spread_s, repeats=timing.repeats,
-                       compile_time_s=timing.compile_s)
+                       compile_time_s=timing.compile_s, cpu_time_ci95_rel=timing.cpu_ci95_rel,
+                       cpu_time_repeats_s=json.dumps(list(timing.cpu_repeats_s)),
+                       calibration_cpu_s=calibration_cpu_s())
             if not first.y.tobytes() == timed.y.tobytes() == last.y.tobytes():
                 row["message"] = "; ".join(filter(None, [row["message"], NOT_DETERMINISTIC]))
         stage = "verdicts"  # also for diverged runs: energy and trajectory gaps up to the divergence
