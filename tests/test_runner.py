@@ -168,6 +168,32 @@ def test_rows_carry_their_cost_precision_repeats_and_calibration(tmp_path):
     assert ok["calibration_cpu_s"].nunique() == 1  # one worker process, one calibration
 
 
+def test_each_compiled_function_is_built_by_one_run_before_the_others(tmp_path):
+    """``compile_first``: one run per integrator and model (and per tolerance for heyoka, which compiles per ε),
+    the cheapest of its group (coarsest setting, shortest scene), and every run exactly once over both groups."""
+    from foucault_bench.bench.run.runner import compile_first
+
+    matrix = load_matrix(write(tmp_path / "compile.toml", """
+        scenes = ["seed_2min", "lab_3m", "lab_3m_ns"]
+        integrators = ["rk4", "heyoka_taylor", "cvode_bdf"]
+        kh = [0.2, 0.1]
+        tol = [1e-6, 1e-8]
+        """))
+    firsts, rest = compile_first(sorted(matrix.runs, key=lambda spec: spec.run_key))
+    assert sorted(spec.run_key for spec in firsts + rest) == sorted(spec.run_key for spec in matrix.runs)
+    groups: dict[tuple, list] = {}
+    for spec in matrix.runs:
+        key = (spec.integrator, spec.scene.model, spec.tol if spec.integrator == "heyoka_taylor" else None)
+        groups.setdefault(key, []).append(spec)
+    assert len(firsts) == len(groups) == len({(spec.integrator, spec.scene.model, spec.tol
+                                               if spec.integrator == "heyoka_taylor" else None) for spec in firsts})
+    for spec in firsts:
+        key = (spec.integrator, spec.scene.model, spec.tol if spec.integrator == "heyoka_taylor" else None)
+        shortest = min(other.scene.duration_s for other in groups[key])
+        coarsest = max((other.kh or other.tol) for other in groups[key] if other.scene.duration_s == shortest)
+        assert (spec.scene.duration_s, spec.kh or spec.tol) == (shortest, coarsest), key
+
+
 def test_diverging_and_failing_runs_are_rows_and_the_others_finish(tmp_path, failing_plugin):
     matrix_path = write(tmp_path / "failing.toml", f"""
         plugins = ["{failing_plugin}"]
