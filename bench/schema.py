@@ -71,7 +71,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("wall_time_s", "REAL", "s", "median wall time of the timed repeats (compile excluded): what a user waits, grows when runs share a core"),
     Column("wall_time_spread_s", "REAL", "s", "max − min of the timed repeats' wall times"),
     Column("repeats", "INTEGER", "", "timed repeats after the warm-up"),
-    Column("compile_time_s", "REAL", "s", "first-call wall time minus the median wall time (JIT compile or cache load)"),
+    Column("compile_time_s", "REAL", "s", "first-call CPU time minus the median CPU time (JIT compile or cache load; wall time in databases of schema version 3 and older)"),
     Column("nfev", "INTEGER", "", "right-hand-side evaluations; for the taylor family (heyoka) the Taylor steps instead, each an order-p expansion costing about p evaluations: not comparable with other families' counts"),
     Column("njev", "INTEGER", "", "Jacobian evaluations where reported"),
     Column("steps", "INTEGER", "", "accepted steps (the charts' second cost axis, counted for every family; one step = s RHS evaluations for Runge-Kutta, one order-p Taylor expansion for heyoka)"),
@@ -124,7 +124,8 @@ SCENE_KEY_MIGRATION = (
 )
 TIMING_MIGRATION = (
     "runs lack the timing protocol's precision, repeats and machine calibration (cpu_time_ci95_rel, "
-    "cpu_time_repeats_s, calibration_cpu_s): added as NULL columns, unknown for the old rows"
+    "cpu_time_repeats_s, calibration_cpu_s): added as NULL columns, unknown for the old rows; their "
+    "compile_time_s is wall time (CPU time from version 4 on)"
 )
 MIGRATIONS: dict[int, str] = {
     1: "runs lack the declared integrator facts (declared_order, stages, adaptive, stability_limit_kh) and the "

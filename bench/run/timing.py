@@ -22,8 +22,9 @@ to a stated precision (defaults: ``TimingPolicy``):
 3. the cost figures are the median of the repeats, their spread (max − min) and, for CPU time, the relative
    half-width of the 95 % confidence interval of the median (``None`` below ``CI_MIN_REPEATS`` repeats) and the
    repeats' CPU times themselves (what a rank test between two runs needs); the compile time is
-   ``warm-up − median`` in wall time (JIT compilation or numba cache load; clipped at 0 because a warm-up that
-   compiles nothing can be faster than the median on a noisy machine).
+   ``warm-up − median`` in CPU time (JIT compilation or a disk-cache load; clipped at 0 because a warm-up that
+   compiles nothing can be faster than the median). CPU time, not wall time: on a loaded machine the warm-up's
+   wall time is mostly waiting for a core (seen: 59 s of "compile" over 4 runs at load average 21).
 
 **The confidence interval** (``median_ci95``) is the distribution-free order-statistic interval of the median:
 for n sorted repeats x₍₁₎ ≤ … ≤ x₍ₙ₎ it is [x₍ₖ₎, x₍ₙ₊₁₋ₖ₎] with the largest k such that
@@ -106,7 +107,7 @@ class TimingPolicy:
 class Timing:
     """Cost of one run: median and spread (max − min) of the timed repeats in wall time and in the thread's CPU
     time (s), the relative half-width of the 95 % CI of the CPU median (``None`` when not established), the
-    repeats' CPU times (s), their count, and the compile time (s, wall)."""
+    repeats' CPU times (s), their count, and the compile time (s, CPU)."""
 
     median_s: float
     spread_s: float
@@ -154,9 +155,9 @@ def time_repeated(call: Callable[[], Result], policy: TimingPolicy,
     timing; when ``accept(warm-up result)`` is false (a failed or diverged run) no repeat is made and the
     timing is ``None``. ``wall_clock`` and ``cpu_clock`` are the two clocks (seconds; a test passes fakes).
     """
-    start = wall_clock()
+    cpu_start = cpu_clock()
     first = call()
-    warm_up_s = wall_clock() - start
+    warm_up_cpu_s = cpu_clock() - cpu_start
     if not accept(first):
         return first, first, None
     durations: list[float] = []
@@ -169,16 +170,16 @@ def time_repeated(call: Callable[[], Result], policy: TimingPolicy,
         durations.append(wall_clock() - start)
         if stop_repeating(cpu_durations, policy):
             break
-    median = statistics.median(durations)
+    cpu_median_s = statistics.median(cpu_durations)
     return first, last, Timing(
-        median_s=median,
+        median_s=statistics.median(durations),
         spread_s=max(durations) - min(durations),
-        cpu_median_s=statistics.median(cpu_durations),
+        cpu_median_s=cpu_median_s,
         cpu_spread_s=max(cpu_durations) - min(cpu_durations),
         cpu_ci95_rel=median_ci95_rel(cpu_durations),
         cpu_repeats_s=tuple(cpu_durations),
         repeats=len(durations),
-        compile_s=max(0.0, warm_up_s - median),
+        compile_s=max(0.0, warm_up_cpu_s - cpu_median_s),
     )
 
 
