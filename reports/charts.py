@@ -233,8 +233,9 @@ def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str, *
         handles.append(line)
         if x_spread is not None and x_spread in sweep.points and sweep.points[x_spread].notna().any():
             half = 0.5 * sweep.points[x_spread].to_numpy(dtype=float)
-            axes.errorbar(x, y, xerr=np.vstack([np.minimum(half, 0.9 * x), half]), fmt="none",
-                          ecolor=style["color"], elinewidth=0.8, capsize=2, alpha=0.7)
+            barred = np.isfinite(half)  # a run without a stated precision gets no bar
+            axes.errorbar(x[barred], y[barred], xerr=np.vstack([np.minimum(half, 0.9 * x), half])[:, barred],
+                          fmt="none", ecolor=style["color"], elinewidth=0.8, capsize=2, alpha=0.7)
         if labels and len(x):  # the finest setting, at the end of the line
             axes.annotate(setting_text(sweep.points.iloc[-1]), (x[-1], y[-1]), fontsize=6.5, color=style["color"],
                           xytext=(4, 3), textcoords="offset points")

@@ -497,10 +497,11 @@ def test_adequacy_chart_keeps_every_element(charts: dict[str, Chart], adequacy_r
 
 
 def _interval_set(trace: dict, key: str, axis: str) -> set[tuple[float, float]]:
-    """(low, high) of each error bar of a trace along ``axis`` ("x" or "y")."""
+    """(low, high) of each error bar of a trace along ``axis`` ("x" or "y"); a NaN length draws no bar."""
     centre = decode(trace[axis])
     plus, minus = decode(trace[key]["array"]), decode(trace[key].get("arrayminus", trace[key]["array"]))
-    return {(round(float(c - m), 15), round(float(c + p), 15)) for c, p, m in zip(centre, plus, minus, strict=True)}
+    return {(round(float(c - m), 15), round(float(c + p), 15)) for c, p, m in zip(centre, plus, minus, strict=True)
+            if math.isfinite(p) and math.isfinite(m)}
 
 
 def assert_result_chart_elements_are_interactive(static, interactive: dict, name: str) -> None:
