@@ -70,16 +70,19 @@ COLUMNS: tuple[Column, ...] = (
     Column("semi_minor_axis_ref_error", "REAL", "", "max |b_e − b_e,ref| / A over the output grid, b_e the semi-minor axis of the osculating small-swing ellipse (bench/verdicts/ellipse.py)"),
     # cost
     Column("cpu_time_s", "REAL", "s", "median CPU time of the worker thread over the timed repeats (compile excluded): the cost the charts and tables use, independent of machine load and --jobs"),
-    Column("cpu_time_spread_s", "REAL", "s", "max − min of the timed repeats' CPU times (0 with a single repeat: a warm-up over single_repeat_over_s, or a first repeat that alone reaches min_total_s when min_repeats = 1)"),
+    Column("cpu_time_spread_s", "REAL", "s", "max − min of the timed repeats' CPU times (0 with a single repeat: a run whose first repeat alone reached the protocol's max_total_s)"),
     Column("wall_time_s", "REAL", "s", "median wall time of the timed repeats (compile excluded): what a user waits, grows when runs share a core"),
     Column("wall_time_spread_s", "REAL", "s", "max − min of the timed repeats' wall times"),
     Column("repeats", "INTEGER", "", "timed repeats after the warm-up"),
-    Column("compile_time_s", "REAL", "s", "first-call wall time minus the median wall time (JIT compile or cache load)"),
+    Column("compile_time_s", "REAL", "s", "first-call CPU time minus the median CPU time (JIT compile or cache load; wall time in databases of schema version 3 and older)"),
     Column("nfev", "INTEGER", "", "right-hand-side evaluations; for the taylor family (heyoka) the Taylor steps instead, each an order-p expansion costing about p evaluations: not comparable with other families' counts"),
     Column("njev", "INTEGER", "", "Jacobian evaluations where reported"),
     Column("steps", "INTEGER", "", "accepted steps (the charts' second cost axis, counted for every family; one step = s RHS evaluations for Runge-Kutta, one order-p Taylor expansion for heyoka)"),
     Column("rejected_steps", "INTEGER", "", "rejected steps where the library reports them"),
     Column("peak_rss_mb", "REAL", "MB", "peak resident memory of the worker after the run"),
+    Column("cpu_time_ci95_rel", "REAL", "", "relative half-width of the distribution-free 95 % confidence interval of the median CPU time (order statistics, bench.run.timing.median_ci95): the stated precision of cpu_time_s; NULL with fewer than 6 timed repeats (no such interval exists) and in rows of an older database"),
+    Column("cpu_time_repeats_s", "TEXT", "s", "the timed repeats' CPU times, a JSON list of seconds in the order they were measured (what a rank test between two runs needs)"),
+    Column("calibration_cpu_s", "REAL", "s", "CPU time of a fixed compiled loop (bench.run.calibration) timed in the worker process that made the run: divide cpu_time_s by it to compare runs of two machines"),
 )
 
 COLUMN_NAMES: tuple[str, ...] = tuple(column.name for column in COLUMNS)
@@ -125,18 +128,24 @@ SCENE_KEY_MIGRATION = (
     "shown as 'name [unknown physics]' beside a name's known keys, never used by advise, and matched by "
     "results --compare only with rows of unknown physics"
 )
+TIMING_MIGRATION = (
+    "runs lack the timing protocol's precision, repeats and machine calibration (cpu_time_ci95_rel, "
+    "cpu_time_repeats_s, calibration_cpu_s): added as NULL columns, unknown for the old rows; their "
+    "compile_time_s is wall time (CPU time from version 4 on)"
+)
+VERDICTS_OF_REAL_PENDULUMS_MIGRATION = (
+    "runs lack energy_balance_max_rel_error (the energy balance of models that conserve no energy), "
+    "canonical_angular_momentum_ref_error and semi_minor_axis_ref_error (the swing's ellipse against the "
+    "reference): added as NULL columns, unknown for the old rows"
+)
 MIGRATIONS: dict[int, str] = {
-    1: "runs lack energy_balance_max_rel_error, canonical_angular_momentum_ref_error and "
-       "semi_minor_axis_ref_error (added as NULL), the declared integrator facts (declared_order, "
-       "stages, adaptive, stability_limit_kh) and the "
+    1: "runs lack the declared integrator facts (declared_order, stages, adaptive, stability_limit_kh) and the "
        "precession errors in rad/s and relative to Ω_E (precession_rate_error_rad_s, _earth, "
        "precession_rate_ref_error_rad_s, _earth): added as NULL columns, unknown for the old rows; and, as for "
-       "version 2, " + SCENE_KEY_MIGRATION,
-    2: "runs lack energy_balance_max_rel_error, canonical_angular_momentum_ref_error and "
-       "semi_minor_axis_ref_error (added as NULL); and " + SCENE_KEY_MIGRATION,
-    3: "runs lack energy_balance_max_rel_error (the energy balance of models that conserve no energy), "
-       "canonical_angular_momentum_ref_error and semi_minor_axis_ref_error (the swing's ellipse against the "
-       "reference): added as NULL columns, unknown for the old rows",
+       "version 2, " + SCENE_KEY_MIGRATION + "; and " + VERDICTS_OF_REAL_PENDULUMS_MIGRATION + "; and "
+       + TIMING_MIGRATION,
+    2: SCENE_KEY_MIGRATION + "; and " + VERDICTS_OF_REAL_PENDULUMS_MIGRATION + "; and " + TIMING_MIGRATION,
+    3: VERDICTS_OF_REAL_PENDULUMS_MIGRATION + "; and " + TIMING_MIGRATION,
 }
 """Older schema version → what a database written under it lacks (the store adds the missing columns)."""
 

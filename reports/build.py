@@ -229,7 +229,8 @@ def _decisions(builder: _Builder, runs: pd.DataFrame, targets: tuple[float, ...]
 def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
     builder.add(Heading("Work-precision"), Paragraph(
         "Each verdict against two costs, one line per integrator: time (median of the timed repeats, compile "
-        "time excluded; the bar across a point spans max − min of the repeats), and the accepted steps, counted "
+        "time excluded; the bar across a point is the 95 % confidence interval of the median CPU time, none where "
+        "fewer than 6 repeats were made, or max − min of the repeats for wall time), and the accepted steps, counted "
         "for every family (what one step costs differs: s right-hand-side evaluations for a Runge-Kutta method, "
         "one corrector solve for a multistep method, one order-p Taylor expansion for heyoka). "
         "The energy error is the largest deviation over the run; the energy drift its least-squares trend, "

@@ -12,7 +12,8 @@ Conventions shared by every chart:
   markers above and below their data;
 * log axes wherever values span decades; axis labels carry units;
 * work-precision charts: cost = CPU time where the results have it, else wall time
-  (``bench.verdicts.pareto.cost_column``), the spread of the timed repeats as horizontal bars, the Pareto
+  (``bench.verdicts.pareto.cost_column``), its precision as horizontal bars (the 95 % confidence interval of
+  the median CPU time; the spread of the repeats for wall time), the Pareto
   envelope as a grey staircase, each line's finest setting written at its end.
 
 ``reports.interactive`` draws the same charts for the HTML page from the same ``sweeps``; these are the static
@@ -228,7 +229,7 @@ def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str, *
                 labels: bool = True) -> list[Line2D]:
     """One line per integrator through its ok runs in sweep order (largest k·h or tolerance first); diverged and
     failed runs and ok runs without a plottable value as edge markers. ``x_spread`` names a column drawn as a
-    horizontal bar of that total length centred on each point (the spread of the timed repeats); ``labels``
+    horizontal bar of that total length centred on each point (the cost's precision, ``COST_SPREADS``); ``labels``
     writes the setting next to the last (finest) point of each line. Returns one legend handle per integrator,
     labelled with its counts of diverged and failed runs."""
     handles = []
@@ -241,8 +242,9 @@ def plot_sweeps(axes: Axes, frame: pd.DataFrame, x_column: str, y_column: str, *
         handles.append(line)
         if x_spread is not None and x_spread in sweep.points and sweep.points[x_spread].notna().any():
             half = 0.5 * sweep.points[x_spread].to_numpy(dtype=float)
-            axes.errorbar(x, y, xerr=np.vstack([np.minimum(half, 0.9 * x), half]), fmt="none",
-                          ecolor=style["color"], elinewidth=0.8, capsize=2, alpha=0.7)
+            barred = np.isfinite(half)  # a run without a stated precision gets no bar
+            axes.errorbar(x[barred], y[barred], xerr=np.vstack([np.minimum(half, 0.9 * x), half])[:, barred],
+                          fmt="none", ecolor=style["color"], elinewidth=0.8, capsize=2, alpha=0.7)
         if labels and len(x):  # the finest setting, at the end of the line
             axes.annotate(setting_text(sweep.points.iloc[-1]), (x[-1], y[-1]), fontsize=6.5, color=style["color"],
                           xytext=(4, 3), textcoords="offset points")
@@ -278,7 +280,7 @@ VERDICT_LABELS: dict[str, tuple[str, str]] = {
 """Verdict column → (short title, axis label) for the work-precision charts (absolute values are plotted)."""
 
 COST_LABELS: dict[str, str] = {
-    "cpu_time_s": "CPU time per run (s): median of the timed repeats, bar = max − min",
+    "cpu_time_s": "CPU time per run (s): median of the timed repeats, bar = its 95 % confidence interval",
     "wall_time_s": "wall time per run (s): median of the timed repeats, bar = max − min",
     "steps": "accepted steps (one step = s RHS evaluations for Runge-Kutta,\n"
              "one corrector solve for multistep, one order-p Taylor expansion for heyoka)",
@@ -286,8 +288,19 @@ COST_LABELS: dict[str, str] = {
 """Cost column → axis label of the work-precision charts. Steps are counted for every family, so no method is
 drawn on an axis whose unit does not apply to it (a Taylor step is not a right-hand-side evaluation); what a
 step costs differs by family, which the time panel shows."""
-COST_SPREADS: dict[str, str] = {"cpu_time_s": "cpu_time_spread_s", "wall_time_s": "wall_time_spread_s"}
-"""Cost column → the column holding the spread (max − min) of its timed repeats (drawn as error bars)."""
+CPU_TIME_CI95_WIDTH = "cpu_time_ci95_width_s"
+"""Derived column (``with_cost_bars``): the full width (s) of the 95 % confidence interval of the median CPU
+time, 2 · ``cpu_time_ci95_rel`` · ``cpu_time_s`` (the stated precision of the cost; NaN where not established)."""
+COST_SPREADS: dict[str, str] = {"cpu_time_s": CPU_TIME_CI95_WIDTH, "wall_time_s": "wall_time_spread_s"}
+"""Cost column → the column holding the total length of its error bar: the 95 % confidence interval of the
+median for CPU time, the spread (max − min) of the timed repeats for wall time."""
+
+
+def with_cost_bars(frame: pd.DataFrame) -> pd.DataFrame:
+    """``frame`` with ``CPU_TIME_CI95_WIDTH`` added (NaN where a row has no stated precision, e.g. an older
+    database's rows)."""
+    relative = frame["cpu_time_ci95_rel"] if "cpu_time_ci95_rel" in frame else np.nan
+    return frame.assign(**{CPU_TIME_CI95_WIDTH: 2.0 * pd.to_numeric(relative) * frame["cpu_time_s"].astype(float)})
 
 
 def cost_axes(frame: pd.DataFrame) -> tuple[str, str]:
@@ -302,7 +315,7 @@ def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame,
 
 def work_precision_figure(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame) -> Figure:
     """Verdict against time and against accepted steps for one scene, one line per integrator,
-    fixed-step and tolerance sweeps on the same axes, the time's spread as bars, the Pareto envelope
+    fixed-step and tolerance sweeps on the same axes, the time's precision as bars, the Pareto envelope
     (``front``: ``bench.verdicts.pareto.pareto_front`` rows of this scene and verdict, may be empty) on the
     time panel."""
     scene = scene_frame["scene"].iloc[0]
@@ -311,6 +324,7 @@ def work_precision_figure(scene_frame: pd.DataFrame, verdict: str, front: pd.Dat
     axes_pair = figure.subplots(1, 2, sharey=True)
     handles = []
     time_cost = cost_axes(scene_frame)[0]
+    scene_frame = with_cost_bars(scene_frame)
     for axes, cost in zip(axes_pair, cost_axes(scene_frame), strict=True):
         handles = plot_sweeps(axes, scene_frame, cost, verdict, x_spread=COST_SPREADS.get(cost),
                               labels=cost == time_cost)

@@ -166,11 +166,12 @@ def _top(frame: pd.DataFrame, column: str) -> float | None:
 
 
 def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame) -> go.Figure:
-    """``charts.work_precision`` for the page: verdict against time (with the Pareto envelope and the spread of
-    the repeats) and against accepted steps."""
+    """``charts.work_precision`` for the page: verdict against time (with the Pareto envelope and the 95 %
+    confidence interval of each median CPU time) and against accepted steps."""
     scene = scene_frame["scene"].iloc[0]
     title, label = charts.VERDICT_LABELS[verdict]
     time_cost, steps = charts.cost_axes(scene_frame)
+    scene_frame = charts.with_cost_bars(scene_frame)
     figure = make_subplots(rows=1, cols=2, shared_yaxes=True, horizontal_spacing=0.04)
     top = _top(scene_frame, verdict)
     for col, cost in ((1, time_cost), (2, steps)):

@@ -197,6 +197,32 @@ def test_work_precision_charts_show_their_scene_and_verdict(charts: dict[str, Ch
     assert len(titles) == len(rows["scene"].unique()) * len(VERDICT_WORDS)
 
 
+def test_the_time_axis_bars_are_the_stored_precision(charts: dict[str, Chart], rows: pd.DataFrame) -> None:
+    """On every work-precision chart's time axis, each run's bar reaches cpu_time_s · (1 ± cpu_time_ci95_rel)
+    (the stored 95 % confidence interval of the median; the left half clipped at 0.9 × the cost on the log axis),
+    and a run without a stated precision has no bar."""
+    checked = {"with": 0, "without": 0}
+    for scene, scene_rows in rows.groupby("scene"):
+        for verdict in VERDICT_WORDS:
+            chart = charts[f"figures/work_precision_{stem_part(scene)}_{verdict}"]
+            for trace in chart.traces():
+                if trace.get("mode") != "lines+markers" or trace.get("xaxis", "x") != "x":
+                    continue
+                runs = plottable(scene_rows[scene_rows["integrator"] == integrator_of(trace)], "cpu_time_s", verdict)
+                bars = trace.get("error_x") or {}
+                plus = decode(bars.get("array")) if bars else np.full(len(decode(trace["x"])), np.nan)
+                for x, half in zip(decode(trace["x"]), plus, strict=True):
+                    run = runs[np.isclose(runs["cpu_time_s"].astype(float), x, rtol=RELATIVE_TOLERANCE)].iloc[0]
+                    precision = run["cpu_time_ci95_rel"]
+                    if pd.isna(precision):
+                        assert np.isnan(half), (chart.stem, x)
+                        checked["without"] += 1
+                    else:
+                        assert math.isclose(half, precision * run["cpu_time_s"], rel_tol=1e-9), (chart.stem, x)
+                        checked["with"] += 1
+    assert checked["with"] and checked["without"]  # the fixture has both kinds: both checks ran
+
+
 def test_the_pareto_trace_is_the_non_dominated_set(charts: dict[str, Chart], rows: pd.DataFrame) -> None:
     for scene, scene_rows in rows.groupby("scene"):
         for verdict in VERDICT_WORDS:
@@ -471,10 +497,11 @@ def test_adequacy_chart_keeps_every_element(charts: dict[str, Chart], adequacy_r
 
 
 def _interval_set(trace: dict, key: str, axis: str) -> set[tuple[float, float]]:
-    """(low, high) of each error bar of a trace along ``axis`` ("x" or "y")."""
+    """(low, high) of each error bar of a trace along ``axis`` ("x" or "y"); a NaN length draws no bar."""
     centre = decode(trace[axis])
     plus, minus = decode(trace[key]["array"]), decode(trace[key].get("arrayminus", trace[key]["array"]))
-    return {(round(float(c - m), 15), round(float(c + p), 15)) for c, p, m in zip(centre, plus, minus, strict=True)}
+    return {(round(float(c - m), 15), round(float(c + p), 15)) for c, p, m in zip(centre, plus, minus, strict=True)
+            if math.isfinite(p) and math.isfinite(m)}
 
 
 def assert_result_chart_elements_are_interactive(static, interactive: dict, name: str) -> None:

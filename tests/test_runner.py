@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from foucault_bench.bench.cli import main as cli_main
@@ -108,6 +109,7 @@ def test_quick_matrix_runs_end_to_end(tmp_path, capsys):
     assert ok["reference_error"].notna().all() and ok["energy_max_rel_error"].notna().all()
     assert (ok["wall_time_s"] > 0).all() and (ok["repeats"] >= 1).all() and (ok["peak_rss_mb"] > 0).all()
     assert (ok["cpu_time_s"] > 0).all() and (ok["cpu_time_spread_s"] >= 0).all()
+    _check_stored_precision(ok)
     # the per-step energy error comes from the untimed monitored call, for the fixed-step loops only
     fixed = ok["kh"].notna()
     assert ok.loc[fixed, "energy_max_rel_error_steps"].notna().all()
@@ -120,6 +122,76 @@ def test_quick_matrix_runs_end_to_end(tmp_path, capsys):
         setting = "kh" if group["kh"].notna().all() else "tol"
         errors = group.sort_values(setting)["reference_error"].to_numpy()
         assert np.all(np.diff(errors) > 0), (scene, integrator, errors)
+
+
+def _check_stored_precision(ok) -> None:
+    """Every timed row's cost figures recomputed from its stored repeats (``cpu_time_repeats_s``): their count,
+    median and spread, and the precision from scipy's binomial order-statistic interval; and a positive
+    machine calibration, the same for the rows of one worker process."""
+    import json
+    import statistics
+
+    from scipy.stats import binom
+
+    for _, row in ok.iterrows():
+        repeats_s = json.loads(row["cpu_time_repeats_s"])
+        assert len(repeats_s) == row["repeats"]
+        assert statistics.median(repeats_s) == row["cpu_time_s"]
+        assert max(repeats_s) - min(repeats_s) == row["cpu_time_spread_s"]
+        ordered, count = sorted(repeats_s), len(repeats_s)
+        covering = [k for k in range(1, count // 2 + 1) if 1 - 2 * binom.cdf(k - 1, count, 0.5) >= 0.95]
+        if not covering:
+            assert pd.isna(row["cpu_time_ci95_rel"])
+        else:
+            k = max(covering)
+            expected = (ordered[count - k] - ordered[k - 1]) / (2 * statistics.median(repeats_s))
+            assert row["cpu_time_ci95_rel"] == pytest.approx(expected, rel=1e-12)
+        assert row["calibration_cpu_s"] > 0
+
+
+def test_rows_carry_their_cost_precision_repeats_and_calibration(tmp_path):
+    """Runs of a short scene under the default timing protocol: every stored figure recomputed from the stored
+    repeats (``_check_stored_precision``), one calibration per worker process."""
+    matrix_path = write(tmp_path / "precision.toml", """
+        scenes = ["seed_2min"]
+        integrators = ["rk4", "scipy_rk45"]
+        kh = [0.2, 0.05]
+        tol = [1e-6]
+        """)
+    matrix = load_matrix(matrix_path)
+    with ResultsStore(tmp_path / "precision.sqlite") as store:
+        run_matrix(matrix, store, jobs=1, progress=False)
+        rows = store.frame()
+    ok = rows[rows["status"] == "ok"]
+    assert len(ok) == len(matrix.runs) == 3
+    _check_stored_precision(ok)
+    assert ok["calibration_cpu_s"].nunique() == 1  # one worker process, one calibration
+
+
+def test_each_compiled_function_is_built_by_one_run_before_the_others(tmp_path):
+    """``compile_first``: one run per integrator and model (and per tolerance for heyoka, which compiles per ε),
+    the cheapest of its group (coarsest setting, shortest scene), and every run exactly once over both groups."""
+    from foucault_bench.bench.run.runner import compile_first
+
+    matrix = load_matrix(write(tmp_path / "compile.toml", """
+        scenes = ["seed_2min", "lab_3m", "lab_3m_ns"]
+        integrators = ["rk4", "heyoka_taylor", "cvode_bdf"]
+        kh = [0.2, 0.1]
+        tol = [1e-6, 1e-8]
+        """))
+    firsts, rest = compile_first(sorted(matrix.runs, key=lambda spec: spec.run_key))
+    assert sorted(spec.run_key for spec in firsts + rest) == sorted(spec.run_key for spec in matrix.runs)
+    groups: dict[tuple, list] = {}
+    for spec in matrix.runs:
+        key = (spec.integrator, spec.scene.model, spec.tol if spec.integrator == "heyoka_taylor" else None)
+        groups.setdefault(key, []).append(spec)
+    assert len(firsts) == len(groups) == len({(spec.integrator, spec.scene.model, spec.tol
+                                               if spec.integrator == "heyoka_taylor" else None) for spec in firsts})
+    for spec in firsts:
+        key = (spec.integrator, spec.scene.model, spec.tol if spec.integrator == "heyoka_taylor" else None)
+        shortest = min(other.scene.duration_s for other in groups[key])
+        coarsest = max((other.kh or other.tol) for other in groups[key] if other.scene.duration_s == shortest)
+        assert (spec.scene.duration_s, spec.kh or spec.tol) == (shortest, coarsest), key
 
 
 def test_diverging_and_failing_runs_are_rows_and_the_others_finish(tmp_path, failing_plugin):

@@ -246,6 +246,7 @@ def test_a_version_2_database_gets_the_scene_keys_its_run_keys_prove(tmp_path):
 
     from foucault_bench.bench.problems.scene_key import scene_key, scene_labels
     from foucault_bench.bench.problems.scenes import SCENES
+    from foucault_bench.bench.schema import SCHEMA_VERSION
 
     import dataclasses
 

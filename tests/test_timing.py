@@ -9,9 +9,9 @@ import time
 import numpy as np
 import pytest
 
-from foucault_bench.bench.run.timing import Timing, TimingPolicy, time_repeated
+from foucault_bench.bench.run.timing import CI_MIN_REPEATS, Timing, TimingPolicy, median_ci95, median_ci95_rel, time_repeated
 
-POLICY = TimingPolicy(min_repeats=3, min_total_s=0.0, max_repeats=3)
+POLICY = TimingPolicy(min_repeats=3, max_repeats=3)
 
 
 def test_cpu_time_leaves_out_waiting_and_wall_time_does_not() -> None:
@@ -82,57 +82,125 @@ class _FakeRun:
         return time_repeated(self, policy, wall_clock=lambda: self.wall_s, cpu_clock=lambda: self.cpu_s)
 
 
-def _expected_repeats(policy: TimingPolicy, warm_up_cpu_s: float, repeat_costs_s: list[float]) -> int:
-    """The protocol's rules read literally: a single repeat after a warm-up over ``single_repeat_over_s``;
-    else the fewest repeats n with n ≥ min_repeats and the first n repeats' CPU time ≥ min_total_s, but
-    never more than max_repeats."""
-    if warm_up_cpu_s > policy.single_repeat_over_s:
-        return 1
-    for count in range(policy.min_repeats, policy.max_repeats + 1):
-        if math.fsum(repeat_costs_s[:count]) >= policy.min_total_s:
+def _ci95_indices(count: int) -> tuple[int, int] | None:
+    """0-based indices of the sorted samples bounding the order-statistic 95 % interval of the median, from
+    scipy's binomial distribution: the narrowest symmetric pair [x_(k), x_(n+1-k)] whose coverage
+    1 − 2·P(B ≤ k − 1), B ~ Binomial(n, ½), is at least 95 %."""
+    from scipy.stats import binom
+
+    best = None
+    for k in range(1, count // 2 + 1):
+        if 1.0 - 2.0 * binom.cdf(k - 1, count, 0.5) >= 0.95:
+            best = (k - 1, count - k)
+    return best
+
+
+def _expected_repeats(policy: TimingPolicy, repeat_costs_s: list[float]) -> int:
+    """The protocol's stopping rule read literally, with the interval from ``_ci95_indices``: stop after the
+    first n repeats when n ≥ max_repeats, or when their total reached min_total_s and either the total reached
+    max_total_s or (n ≥ min_repeats and the interval's half-width ≤ target_ci95_rel × median)."""
+    for count in range(1, policy.max_repeats + 1):
+        done = repeat_costs_s[:count]
+        total_s = math.fsum(done)
+        if count == policy.max_repeats:
             return count
-    return policy.max_repeats
+        if total_s < policy.min_total_s:
+            continue
+        if total_s >= policy.max_total_s:
+            return count
+        indices = _ci95_indices(count)
+        if count >= policy.min_repeats and indices is not None:
+            ordered = sorted(done)
+            if ordered[indices[1]] - ordered[indices[0]] <= 2 * policy.target_ci95_rel * statistics.median(done):
+                return count
+    raise AssertionError("not reached")
 
 
-# Dyadic costs (exact in binary), so that no sum sits on a rounding boundary of a threshold.
-_COST_SEQUENCES_S = ([1 / 64], [1 / 8], [3 / 4], [1 / 1024], [1 / 16, 1 / 256, 1 / 4, 1 / 32, 1 / 2] * 4,
-                     [2.0, 1 / 128])
-_POLICIES = [TimingPolicy(min_repeats=minimum, min_total_s=total, max_repeats=maximum, single_repeat_over_s=1.0)
-             for minimum in (1, 2, 3) for maximum in (minimum, 5, 20) for total in (0.0, 0.05, 0.5, 100.0)]
+def test_the_median_interval_is_the_order_statistic_one_and_covers_95_percent() -> None:
+    """For every sample size up to 60, the bounds are the order statistics scipy's binomial distribution picks,
+    and none exists below 6 repeats; its half-width relative to the median is what the rows store."""
+    rng = np.random.default_rng(1)
+    for count in range(1, 61):
+        samples = list(rng.lognormal(0.0, 0.1, count))
+        indices = _ci95_indices(count)
+        interval = median_ci95(samples)
+        assert (interval is None) == (indices is None) == (count < CI_MIN_REPEATS), count
+        if interval is not None:
+            ordered = sorted(samples)
+            assert interval == (ordered[indices[0]], ordered[indices[1]])
+            assert median_ci95_rel(samples) == pytest.approx(
+                (interval[1] - interval[0]) / (2 * float(np.median(samples))), rel=1e-12)
 
 
-@pytest.mark.parametrize("policy", _POLICIES, ids=lambda p: f"min{p.min_repeats}-max{p.max_repeats}-{p.min_total_s}s")
-@pytest.mark.parametrize("costs_s", _COST_SEQUENCES_S, ids=lambda c: f"{c[0]:g}s")
-def test_every_policy_repeats_by_its_rules(policy: TimingPolicy, costs_s: list[float]) -> None:
-    """At least min_repeats, then until min_total_s of CPU time or max_repeats, for every combination (the
-    quick matrix's min_repeats = 1 included); a single repeat after a warm-up over single_repeat_over_s."""
+def test_the_interval_covers_the_median_in_95_percent_of_samples() -> None:
+    """Coverage measured on 4000 samples of 9 repeats from a skewed distribution of known median (exp(0) = 1
+    for the log-normal): at least 95 % minus 3 binomial standard deviations (0.95 − 3·√(0.95·0.05/4000))."""
+    rng = np.random.default_rng(2)
+    trials = 4000
+    covered = 0
+    for _ in range(trials):
+        lower, upper = median_ci95(list(rng.lognormal(0.0, 0.2, 9)))
+        covered += lower <= 1.0 <= upper
+    assert covered / trials >= 0.95 - 3 * math.sqrt(0.95 * 0.05 / trials)
+
+
+# Costs with a pattern of spreads (dyadic, exact in binary: no sum sits on a rounding boundary of a threshold).
+_COST_SEQUENCES_S = ([1 / 64], [1 / 8], [3 / 4], [1 / 1024], [1 / 16, 1 / 256, 1 / 4, 1 / 32, 1 / 2] * 8,
+                     [2.0, 1 / 128], [1 / 128, 1 / 128 + 1 / 4096, 1 / 128 - 1 / 4096] * 20,
+                     [1 / 256 * (1 + (index % 7) / 16) for index in range(60)])
+_POLICIES = [TimingPolicy(min_repeats=minimum, max_repeats=maximum, min_total_s=floor_s, max_total_s=cap_s,
+                          target_ci95_rel=target)
+             for minimum in (1, 3, 6) for maximum in (minimum, 10, 40) for floor_s in (0.0, 0.05)
+             for cap_s in (0.05, 0.3, 100.0) for target in (0.03, 0.2)]
+
+
+@pytest.mark.parametrize("costs_s", _COST_SEQUENCES_S, ids=lambda c: f"{c[0]:g}s-{len(c)}")
+def test_every_policy_repeats_by_its_rules(costs_s: list[float]) -> None:
+    """The stopping rule for every combination of floor, caps and target, on steady and on spread costs; the
+    stored figures are those of the repeats (the warm-up, the first cost, is never among them)."""
+    for policy in _POLICIES:
+        _check_policy(policy, costs_s)
+
+
+def _check_policy(policy: TimingPolicy, costs_s: list[float]) -> None:
     run = _FakeRun(costs_s)
     per_call = [costs_s[min(index, len(costs_s) - 1)] for index in range(policy.max_repeats + 1)]
-    expected = _expected_repeats(policy, per_call[0], per_call[1:])
+    expected = _expected_repeats(policy, per_call[1:])
     first, last, timing = run.timed(policy)
     assert timing is not None and timing.repeats == expected
     assert run.calls == expected + 1 and first == 1 and last == expected + 1
     repeats_s = per_call[1:expected + 1]
+    assert list(timing.cpu_repeats_s) == repeats_s
     assert timing.cpu_median_s == statistics.median(repeats_s)
     assert timing.cpu_spread_s == max(repeats_s) - min(repeats_s)
+    indices = _ci95_indices(expected)
+    if indices is None:
+        assert timing.cpu_ci95_rel is None
+    else:
+        ordered = sorted(repeats_s)
+        assert timing.cpu_ci95_rel == pytest.approx(
+            (ordered[indices[1]] - ordered[indices[0]]) / (2 * statistics.median(repeats_s)), rel=1e-12)
     assert timing.median_s == pytest.approx(statistics.median(repeats_s) + run.wait_s, rel=1e-12)
     assert timing.spread_s == pytest.approx(max(repeats_s) - min(repeats_s), abs=1e-12)
-    assert timing.compile_s == pytest.approx(max(0.0, per_call[0] + run.wait_s - timing.median_s), abs=1e-12)
+    assert timing.compile_s == pytest.approx(max(0.0, per_call[0] - statistics.median(repeats_s)), abs=1e-12)
 
 
-def test_the_quick_matrix_repeats_a_fast_run_and_measures_a_spread() -> None:
-    """The quick matrix (min_repeats = 1, min_total_s = 0.05 s, max_repeats = 5; bench/README.md "How a run is
-    measured"): a 10-ms run is repeated 5 times, a 20-ms one 3 times (60 ms ≥ 50 ms), a 0.2-s one once; the
-    default policy (3 repeats and 0.5 s, at most 20) repeats a 10-ms run 20 times and a 0.2-s one 3 times,
-    and a run whose warm-up took 1.5 s once."""
+def test_the_default_protocol_spends_where_precision_needs_it() -> None:
+    """The default policy (bench/README.md "How a run is measured"): a steady 10-ms run stops at the floor of 6
+    repeats with its precision established; a 10-ms run whose repeats scatter by ± 20 % repeats on until the
+    time cap (0.3 s: 30 repeats) and stores the precision it reached; a 0.2-s run stops at the time cap after 2
+    repeats (no 95 % interval from 2); a 1.5-s run is repeated once. The quick matrix stops at 0.05 s or 5
+    repeats."""
     from foucault_bench.bench.run.matrix import load_matrix
 
-    quick = load_matrix("quick").timing
-    default = load_matrix("default").timing
+    default, quick = load_matrix("default").timing, load_matrix("quick").timing
     assert default == TimingPolicy()
-    for policy, cost_s, repeats in ((quick, 0.01, 5), (quick, 0.02, 3), (quick, 0.2, 1),
-                                    (default, 0.01, 20), (default, 0.2, 3), (default, 1.5, 1)):
-        run = _FakeRun([cost_s, *[cost_s * (1.0 + 0.01 * index) for index in range(1, 25)]])
-        _, _, timing = run.timed(policy)
-        assert timing is not None and timing.repeats == repeats, (policy, cost_s)
-        assert (timing.cpu_spread_s > 0.0) == (repeats > 1)
+    scatter = [0.01 * (1.0 + 0.2 * math.sin(index)) for index in range(60)]
+    for policy, costs_s, repeats, established in (
+            (default, [0.01], CI_MIN_REPEATS, True), (default, scatter, 30, True), (default, [0.2], 2, False),
+            (default, [1.5], 1, False), (quick, [0.01], 5, False), (quick, [0.02], 3, False), (quick, [0.2], 1, False)):
+        _, _, timing = _FakeRun(costs_s).timed(policy)
+        assert timing is not None and timing.repeats == repeats, (policy, costs_s[0])
+        assert (timing.cpu_ci95_rel is not None) == established
+        if costs_s is scatter:
+            assert timing.cpu_ci95_rel > default.target_ci95_rel

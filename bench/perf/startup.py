@@ -43,7 +43,7 @@ tol = [1e-8]
 
 [timing]
 min_repeats = 1
-min_total_s = 0.05
+max_total_s = 0.05
 max_repeats = 3
 """
 CLI_MODULE = "foucault_bench.bench.cli"

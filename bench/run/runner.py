@@ -33,6 +33,10 @@ Start-up: the executor starts its workers at once (``bench.run.executors``), and
 libraries while the main process reads and validates the matrix; this module imports no numerical library at
 the top, so the main process pays only for what it uses (the matrix, the store). Longer runs are started
 first (adaptive before fixed-step, longer scenes and finer settings first), which shortens the tail.
+
+Compile once: the cheapest run of each compiled function (``compile_key``: integrator and model, and ε for
+heyoka) runs before every other run (``compile_first``), so that each function is compiled once per machine
+into numba's and heyoka's disk caches, and the other workers load it instead of compiling it too.
 """
 
 from __future__ import annotations
@@ -40,6 +44,8 @@ from __future__ import annotations
 import collections
 import contextlib
 import importlib
+import itertools
+import json
 import math
 import numbers
 import os
@@ -53,6 +59,7 @@ from tqdm import tqdm
 
 from foucault_bench.bench.errors import RunInterrupted
 from foucault_bench.bench.problems.scene_key import scene_key
+from foucault_bench.bench.run.calibration import calibration_cpu_s
 from foucault_bench.bench.run.executors import WORKER_DIED, DaskExecutor, LocalExecutor, make_executor
 from foucault_bench.bench.run.timing import limit_threads, peak_rss_mb, time_repeated
 from foucault_bench.bench.run.worker import describe
@@ -203,7 +210,9 @@ def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
         if timing is not None:
             row.update(cpu_time_s=timing.cpu_median_s, cpu_time_spread_s=timing.cpu_spread_s,
                        wall_time_s=timing.median_s, wall_time_spread_s=timing.spread_s, repeats=timing.repeats,
-                       compile_time_s=timing.compile_s)
+                       compile_time_s=timing.compile_s, cpu_time_ci95_rel=timing.cpu_ci95_rel,
+                       cpu_time_repeats_s=json.dumps(list(timing.cpu_repeats_s)),
+                       calibration_cpu_s=calibration_cpu_s())
             if not first.y.tobytes() == timed.y.tobytes() == last.y.tobytes():
                 row["message"] = "; ".join(filter(None, [row["message"], NOT_DETERMINISTIC]))
         stage = "verdicts"  # also for diverged runs: energy and trajectory gaps up to the divergence
@@ -355,11 +364,36 @@ def _prepare_scenes(executor, scenes: list[Scene], matrix: Matrix, store: Result
     return broken
 
 
+def compile_key(spec: RunSpec) -> tuple:
+    """What a run's compiled code depends on: the integrator and the model (numba's loops and right-hand sides
+    are compiled per model); for the taylor family also the tolerance (heyoka compiles one integrator per ε,
+    whose Taylor order it sets)."""
+    tolerance = spec.tol if dict(spec.declared).get("family") == "taylor" else None
+    return spec.integrator, spec.scene.model, tolerance
+
+
+def compile_first(specs: list[RunSpec]) -> tuple[list[RunSpec], list[RunSpec]]:
+    """``specs`` split into the cheapest run of each ``compile_key`` (cheapest first) and the rest (in their
+    order). The runner finishes the first group before it starts the second, so that each compiled function is
+    built once per machine, by one worker, into numba's and heyoka's disk caches, and every other worker loads
+    it from there instead of compiling it again at the same time."""
+    cheapest: dict[tuple, RunSpec] = {}
+    for spec in specs:
+        key = compile_key(spec)
+        if key not in cheapest or _estimated_cost(spec) > _estimated_cost(cheapest[key]):
+            cheapest[key] = spec
+    firsts = sorted(cheapest.values(), key=_estimated_cost, reverse=True)
+    chosen = {id(spec) for spec in firsts}
+    return firsts, [spec for spec in specs if id(spec) not in chosen]
+
+
 def _execute_runs(executor, specs: list[RunSpec], matrix: Matrix, store: ResultsStore, matrix_id: str,
                   progress: bool, already: int) -> None:
     counts = collections.Counter(failed=already)
-    results = executor.map_unordered(execute_run, [(spec, matrix_id) for spec in specs], run_failure,
-                                     timeout_s=matrix.run_timeout_s)
+    results = itertools.chain.from_iterable(
+        executor.map_unordered(execute_run, [(spec, matrix_id) for spec in group], run_failure,
+                               timeout_s=matrix.run_timeout_s)
+        for group in compile_first(specs))
     with tqdm(total=len(specs), desc=f"{matrix.name} runs", unit="run", disable=not progress,
               file=sys.stderr) as bar:
         for (spec, _), row in results:

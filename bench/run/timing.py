@@ -4,20 +4,37 @@ This module imports only the standard library at load time, so that a freshly sp
 thread-count environment variables *before* numpy, numba or heyoka are imported (OpenBLAS and numba read
 them once, at import).
 
-Timing protocol (``time_repeated``), the same for every integrator (defaults: ``TimingPolicy``, at least
-3 repeats and 0.5 s, at most 20, a single repeat after a warm-up over 1 s):
+Timing protocol (``time_repeated``), the same for every integrator; it repeats a run until its cost is known
+to a stated precision (defaults: ``TimingPolicy``):
 
 1. one warm-up call; its result is the one the verdicts are computed from;
-2. timed repeats of the identical call until at least ``min_repeats`` repeats *and* ``min_total_s`` seconds
-   of repeats are done, stopping at ``max_repeats`` (whatever ``min_repeats`` is: with ``min_repeats = 1`` a
-   fast run is still repeated until ``min_total_s`` is spent); when the warm-up call alone took longer than
-   ``single_repeat_over_s`` a single timed repeat is made (a run that long is already a stable figure, and
-   three repeats of the slowest library runs would take most of the default matrix's budget). Both
-   decisions count CPU time (below), so that the number of repeats does not depend on the machine's load;
-   with a single repeat the spread is 0 (nothing to compare it with);
-3. the cost figures are the median of the repeats and their spread (max − min), each for two clocks, and
-   the compile time ``warm-up − median`` in wall time (JIT compilation or numba cache load; clipped at 0
-   because a warm-up that compiles nothing can be faster than the median on a noisy machine).
+2. timed repeats of the identical call. After each repeat the protocol stops as soon as
+
+   * the 95 % confidence interval of the median CPU time is within ± ``target_ci95_rel`` (3 %) of the median
+     (``median_ci95_rel``) and at least ``min_repeats`` repeats and ``min_total_s`` seconds of them are done, or
+   * ``max_repeats`` repeats are done (the cap on repeats), or
+   * the repeats' CPU time reached ``max_total_s`` (the cap on time; it overrides ``min_repeats``: a run that
+     long is measured by one or a few repeats, and their precision is stored as not established when they are
+     fewer than ``CI_MIN_REPEATS``), but never before ``min_total_s``.
+
+   Every decision counts CPU time (below), so that the number of repeats does not depend on the machine's
+   load. Runs whose repeats agree stop at the floor; short runs with a wider spread get more repeats;
+3. the cost figures are the median of the repeats, their spread (max − min) and, for CPU time, the relative
+   half-width of the 95 % confidence interval of the median (``None`` below ``CI_MIN_REPEATS`` repeats) and the
+   repeats' CPU times themselves (what a rank test between two runs needs); the compile time is
+   ``warm-up − median`` in CPU time (JIT compilation or a disk-cache load; clipped at 0 because a warm-up that
+   compiles nothing can be faster than the median). CPU time, not wall time: on a loaded machine the warm-up's
+   wall time is mostly waiting for a core (seen: 59 s of "compile" over 4 runs at load average 21).
+
+**The confidence interval** (``median_ci95``) is the distribution-free order-statistic interval of the median:
+for n sorted repeats x₍₁₎ ≤ … ≤ x₍ₙ₎ it is [x₍ₖ₎, x₍ₙ₊₁₋ₖ₎] with the largest k such that
+2 · P(B ≤ k − 1) ≤ 0.05, B ~ Binomial(n, ½); its coverage 1 − 2 · P(B ≤ k − 1) ≥ 95 % holds for any continuous
+distribution of the repeats (W. J. Conover, *Practical Nonparametric Statistics*, 3rd ed., Wiley 1999,
+§3.2, "confidence interval for a quantile"; the same interval as ``scipy.stats.quantile_test(...).confidence_interval``
+with p = ½). It exists from n = 6 repeats on (``CI_MIN_REPEATS``: with 5, [x₍₁₎, x₍₅₎] covers only
+1 − 2/32 = 93.75 %). Its relative half-width is (x₍ₙ₊₁₋ₖ₎ − x₍ₖ₎) / (2 · median). The repeats of one run are
+taken as independent draws of its cost (no trend); a machine whose speed drifts during a run breaks that
+assumption, which is why the repeats are stored with the row.
 
 Two clocks are read around every timed call:
 
@@ -33,13 +50,14 @@ Two clocks are read around every timed call:
 
 from __future__ import annotations
 
+import math
 import os
 import resource
 import statistics
 import sys
 import time
 from dataclasses import dataclass
-from typing import Callable, TypeVar
+from typing import Callable, Sequence, TypeVar
 
 THREAD_ENVIRONMENT: dict[str, str] = {
     "OMP_NUM_THREADS": "1",
@@ -53,6 +71,11 @@ THREAD_ENVIRONMENT: dict[str, str] = {
 """Environment that caps every native thread pool a worker may load at one thread (numba: its docs,
 "Environment variables", NUMBA_NUM_THREADS; OpenBLAS/OpenMP/MKL: their documented variables)."""
 
+CI_LEVEL = 0.95
+"""Confidence level of the interval of the median (``median_ci95``)."""
+CI_MIN_REPEATS = 6
+"""The fewest repeats whose order-statistic interval [min, max] covers the median with ≥ 95 %: 1 − 2 · 2⁻⁶."""
+
 Result = TypeVar("Result")
 
 
@@ -60,34 +83,66 @@ Result = TypeVar("Result")
 class TimingPolicy:
     """How many timed repeats to make (see the module docstring for the protocol)."""
 
-    min_repeats: int = 3
-    min_total_s: float = 0.5
-    max_repeats: int = 20
-    single_repeat_over_s: float = 1.0
+    min_repeats: int = CI_MIN_REPEATS
+    max_repeats: int = 40
+    target_ci95_rel: float = 0.03
+    min_total_s: float = 0.0
+    max_total_s: float = 0.3
 
     def problems(self) -> list[str]:
         """Every inconsistency in the policy, one message each (empty when valid)."""
         found = []
         if not 1 <= self.min_repeats <= self.max_repeats:
             found.append(f"timing: need 1 <= min_repeats <= max_repeats, got {self.min_repeats} and {self.max_repeats}")
+        if not self.target_ci95_rel > 0:
+            found.append(f"timing: target_ci95_rel must be > 0, got {self.target_ci95_rel!r}")
         if not self.min_total_s >= 0:
             found.append(f"timing: min_total_s must be >= 0 s, got {self.min_total_s!r}")
-        if not self.single_repeat_over_s > 0:
-            found.append(f"timing: single_repeat_over_s must be > 0 s, got {self.single_repeat_over_s!r}")
+        if not self.max_total_s > 0:
+            found.append(f"timing: max_total_s must be > 0 s, got {self.max_total_s!r}")
         return found
 
 
 @dataclass(frozen=True)
 class Timing:
     """Cost of one run: median and spread (max − min) of the timed repeats in wall time and in the thread's CPU
-    time (s), their count, and the compile time (s, wall)."""
+    time (s), the relative half-width of the 95 % CI of the CPU median (``None`` when not established), the
+    repeats' CPU times (s), their count, and the compile time (s, CPU)."""
 
     median_s: float
     spread_s: float
     cpu_median_s: float
     cpu_spread_s: float
+    cpu_ci95_rel: float | None
+    cpu_repeats_s: tuple[float, ...]
     repeats: int
     compile_s: float
+
+
+def median_ci95(samples: Sequence[float]) -> tuple[float, float] | None:
+    """The distribution-free 95 % confidence interval of the median of ``samples`` (the module docstring:
+    order statistics, Conover 1999 §3.2), or ``None`` for fewer than ``CI_MIN_REPEATS`` samples."""
+    n = len(samples)
+    if n < CI_MIN_REPEATS:
+        return None
+    alpha_half = (1.0 - CI_LEVEL) / 2.0
+    lower_tail, k = 0.0, 0  # lower_tail = P(B <= k - 1) for the interval [x_(k), x_(n+1-k)] (1-based)
+    while lower_tail + math.comb(n, k) / 2.0**n <= alpha_half:
+        lower_tail += math.comb(n, k) / 2.0**n
+        k += 1
+    ordered = sorted(samples)
+    return ordered[k - 1], ordered[n - k]
+
+
+def median_ci95_rel(samples: Sequence[float]) -> float | None:
+    """Relative half-width (upper − lower) / (2 · median) of ``median_ci95`` (``None`` where it does not exist,
+    ``inf`` for a zero median with a nonzero width)."""
+    interval = median_ci95(samples)
+    if interval is None:
+        return None
+    width = interval[1] - interval[0]
+    median = statistics.median(samples)
+    return width / (2.0 * median) if median > 0 else (0.0 if width == 0 else math.inf)
 
 
 def time_repeated(call: Callable[[], Result], policy: TimingPolicy,
@@ -100,38 +155,45 @@ def time_repeated(call: Callable[[], Result], policy: TimingPolicy,
     timing; when ``accept(warm-up result)`` is false (a failed or diverged run) no repeat is made and the
     timing is ``None``. ``wall_clock`` and ``cpu_clock`` are the two clocks (seconds; a test passes fakes).
     """
-    start, cpu_start = wall_clock(), cpu_clock()
+    cpu_start = cpu_clock()
     first = call()
     warm_up_cpu_s = cpu_clock() - cpu_start
-    warm_up_s = wall_clock() - start
     if not accept(first):
         return first, first, None
-    single = warm_up_cpu_s > policy.single_repeat_over_s
     durations: list[float] = []
     cpu_durations: list[float] = []
     last = first
-
-    def more_wanted() -> bool:
-        if single:
-            return not durations
-        if len(durations) < policy.min_repeats:
-            return True
-        return sum(cpu_durations) < policy.min_total_s and len(durations) < policy.max_repeats
-
-    while more_wanted():
+    while True:
         start, cpu_start = wall_clock(), cpu_clock()
         last = call()
         cpu_durations.append(cpu_clock() - cpu_start)
         durations.append(wall_clock() - start)
-    median = statistics.median(durations)
+        if stop_repeating(cpu_durations, policy):
+            break
+    cpu_median_s = statistics.median(cpu_durations)
     return first, last, Timing(
-        median_s=median,
+        median_s=statistics.median(durations),
         spread_s=max(durations) - min(durations),
-        cpu_median_s=statistics.median(cpu_durations),
+        cpu_median_s=cpu_median_s,
         cpu_spread_s=max(cpu_durations) - min(cpu_durations),
+        cpu_ci95_rel=median_ci95_rel(cpu_durations),
+        cpu_repeats_s=tuple(cpu_durations),
         repeats=len(durations),
-        compile_s=max(0.0, warm_up_s - median),
+        compile_s=max(0.0, warm_up_cpu_s - cpu_median_s),
     )
+
+
+def stop_repeating(cpu_durations_s: Sequence[float], policy: TimingPolicy) -> bool:
+    """Whether the repeats so far (their CPU times, s) end the timing (the module docstring's rule 2)."""
+    count, total_s = len(cpu_durations_s), math.fsum(cpu_durations_s)
+    if total_s < policy.min_total_s:
+        return count >= policy.max_repeats
+    if count >= policy.max_repeats or total_s >= policy.max_total_s:
+        return True
+    if count < policy.min_repeats:
+        return False
+    precision = median_ci95_rel(cpu_durations_s)
+    return precision is not None and precision <= policy.target_ci95_rel
 
 
 def peak_rss_mb() -> float:

@@ -60,7 +60,8 @@ WORKER_MODULES = (
     "foucault_bench.bench.verdicts.adequacy",
     "foucault_bench.bench.verdicts.columns",
 )
-"""What a worker imports to run (``warm_up``, its first task, while the main process validates the matrix)."""
+"""What a worker imports to run (``warm_up``, its first task, while the main process validates the matrix; it also
+times the calibration loop then)."""
 
 _SPAWNER = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="foucault-bench-spawner")
 """Starts every worker: its thread lives as long as the process, which is what PR_SET_PDEATHSIG watches."""
@@ -100,11 +101,14 @@ def describe(error: BaseException) -> str:
 
 
 def warm_up() -> None:
-    """Import ``WORKER_MODULES``."""
+    """Import ``WORKER_MODULES`` and time the machine-speed calibration (``bench.run.calibration``)."""
     import importlib
+
+    from foucault_bench.bench.run.calibration import calibration_cpu_s
 
     for module_name in WORKER_MODULES:
         importlib.import_module(module_name)
+    calibration_cpu_s()
 
 
 class WorkerProcess:
