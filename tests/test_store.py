@@ -199,14 +199,12 @@ def _old_database(path, extra_column: str | None = None) -> None:
 
 
 def test_a_new_database_records_the_schema_version(tmp_path):
-    from foucault_bench.bench.schema import SCHEMA_VERSION
 
     with ResultsStore(tmp_path / "new.sqlite") as store:
         assert store.schema_version == SCHEMA_VERSION
 
 
 def test_an_older_database_is_migrated_and_its_unknown_facts_read_as_missing(tmp_path):
-    from foucault_bench.bench.schema import SCHEMA_VERSION
 
     path = tmp_path / "old.sqlite"
     _old_database(path)
@@ -246,7 +244,6 @@ def test_a_version_2_database_gets_the_scene_keys_its_run_keys_prove(tmp_path):
 
     from foucault_bench.bench.problems.scene_key import scene_key, scene_labels
     from foucault_bench.bench.problems.scenes import SCENES
-    from foucault_bench.bench.schema import SCHEMA_VERSION
 
     import dataclasses
 
