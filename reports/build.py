@@ -8,7 +8,7 @@ The folder opens in a browser with no server and no network: index.html and REPO
 ``reports.interactive``; plotly.js is written beside it), and each links its static PNG + SVG files under
 ``figures/`` (``reports.charts``, matplotlib, for papers; REPORT.md shows these). Tables are embedded and
 written under ``tables/`` as CSV, Markdown, LaTeX and HTML. The summary answers which integrator and setting
-is cheapest per scene at each target error (``--targets``, default 1e-3 1e-6 1e-9), with the Pareto fronts of
+is cheapest per scene at each target error (``--targets``, default 1e-3 1e-6 1e-9 1e-12), with the Pareto fronts of
 every error metric (``bench.verdicts.pareto``). File names made from scene names go through ``file_stem``. The study tables (``bench.studies``) are read from the database
 and computed (then stored) when missing, or recomputed with ``--studies recompute``; ``--studies skip`` leaves
 their sections out. The seed note's figures (``reports.seed``) are a section of the report.

@@ -1,6 +1,6 @@
 """The report's tables, derived from the results rows (columns of ``bench.schema``) as plain DataFrames.
 
-* ``matched_accuracy``: per scene and target (1e-3, 1e-6, 1e-9 or the targets given), the cheapest integrator
+* ``matched_accuracy``: per scene and target (1e-3, 1e-6, 1e-9, 1e-12 or the targets given), the cheapest integrator
   and setting whose reference error meets it, the runner-up and the cost ratio (``bench.verdicts.pareto``);
 * ``per_integrator``: one row per (scene, integrator): the cheapest setting whose reference error reaches
   ``target`` (1e-6 by default), its cost, or "not reached"; run counts by status;

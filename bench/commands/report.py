@@ -9,7 +9,7 @@ from pathlib import Path
 from foucault_bench.bench.run.store import DEFAULT_DB  # the store module imports no numerical library
 
 DEFAULT_OUT = Path("results") / "report"
-DEFAULT_TARGETS = (1e-3, 1e-6, 1e-9)
+DEFAULT_TARGETS = (1e-3, 1e-6, 1e-9, 1e-12)
 """Target reference errors of the matched-accuracy summary (``reports.build.DEFAULT_TARGETS``, kept equal by
 tests/test_cli.py)."""
 

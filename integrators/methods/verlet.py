@@ -83,14 +83,15 @@ def rotation_coefficients(weights: tuple[float, ...]) -> tuple[float, ...]:
     return (0.5 * weights[0], *inner, 0.5 * weights[-1])
 
 
-def verlet_sequence(model: Model, weights: tuple[float, ...]) -> Callable:
+def verlet_sequence(model: Model, weights: tuple[float, ...], remainder_sweeps: int = 2) -> Callable:
     """A numba step ``(x, y, vx, vy, h, p)``: the rotating-frame Verlet steps with sub-steps γ_1 h … γ_s h in turn,
     computed in the canonical variables with neighbouring rotations merged (``rotation_coefficients``); one
-    Verlet step is ``weights = (1.0,)``. The s + 1 rotations depend on p and h alone: they are built first, as
+    Verlet step is ``weights = (1.0,)``. ``remainder_sweeps``: the fixed-point sweeps of the implicit half kick
+    on a model with a velocity-dependent remainder (``_plane_parts``). The s + 1 rotations depend on p and h alone: they are built first, as
     one tuple, which the compiler hoists out of the fixed-step loop (the step is inlined into it), and the
     sub-steps are a loop over them, as a C programmer writes it (bench/perf/loops.c; fully unrolled, the
     nine sub-steps of ``composition6`` on the sphere ran 5 % slower)."""
-    parts = _sphere_parts(model) if model.constrained_to_sphere else _plane_parts(model)
+    parts = _sphere_parts(model) if model.constrained_to_sphere else _plane_parts(model, remainder_sweeps)
     weights = tuple(float(gamma) for gamma in weights)
     rotations = _rotations(parts.rotation, rotation_coefficients(weights))
     to_canonical, turn, kick_drift_kick, from_canonical = (
@@ -128,9 +129,11 @@ def _rotations(rotation: Callable, coefficients: tuple[float, ...]) -> Callable:
     return rotations
 
 
-def _plane_parts(model: Model) -> _Parts:
+def _plane_parts(model: Model, remainder_sweeps: int = 2) -> _Parts:
     """The planar pieces: ω_c = a ẑ, p = v + a ẑ×r; the model's velocity-dependent remainder (if any) added to the
-    half kicks, explicitly in the first and implicitly (two fixed-point sweeps) in the second."""
+    half kicks, explicitly in the first and implicitly (``remainder_sweeps`` fixed-point sweeps) in the second.
+    Each sweep multiplies the error of the implicit solve by O(h ∂G/∂v); two make the step symmetric to well
+    beyond order 2, a composition of order p needs its base step symmetric beyond order p (more sweeps)."""
     kick, remainder, hamiltonian = model.numba_kick, model.numba_remainder, model.hamiltonian
 
     @jit(inline="always")
@@ -168,7 +171,7 @@ def _plane_parts(model: Model) -> _Parts:
         px = px_half + 0.5 * h * fx
         py = py_half + 0.5 * h * fy
         if not hamiltonian:
-            for _sweep in range(2):
+            for _sweep in range(remainder_sweeps):
                 gx, gy, _ = remainder(x, y, 0.0, px + a * y, py - a * x, 0.0, p)
                 px = px_half + 0.5 * h * (fx + gx)
                 py = py_half + 0.5 * h * (fy + gy)
