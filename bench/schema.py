@@ -77,6 +77,9 @@ COLUMNS: tuple[Column, ...] = (
     Column("steps", "INTEGER", "", "accepted steps (the charts' second cost axis, counted for every family; one step = s RHS evaluations for Runge-Kutta, one order-p Taylor expansion for heyoka)"),
     Column("rejected_steps", "INTEGER", "", "rejected steps where the library reports them"),
     Column("peak_rss_mb", "REAL", "MB", "peak resident memory of the worker after the run"),
+    Column("cpu_time_ci95_rel", "REAL", "", "relative half-width of the 95 % confidence interval of the median CPU time"),
+    Column("cpu_time_repeats_s", "TEXT", "s", "the timed repeats' CPU times, a JSON list in order"),
+    Column("calibration_cpu_s", "REAL", "s", "CPU time of a fixed compiled loop timed in the same worker: divides costs from two machines"),
 )
 
 COLUMN_NAMES: tuple[str, ...] = tuple(column.name for column in COLUMNS)
