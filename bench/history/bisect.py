@@ -38,7 +38,7 @@ class Configuration:
     tol: float | None = None
 
     def matrix_toml(self) -> str:
-        setting = f"kh = [{self.kh!r}]\ntol = []" if self.kh is not None else f"kh = []\ntol = [{self.tol!r}]"
+        setting = f"kh = [{self.kh!r}]" if self.kh is not None else f"tol = [{self.tol!r}]"
         return (f'name = "bisect"\ndescription = "one run, for foucault-bench bisect"\nscenes = ["{self.scene}"]\n'
                 f'integrators = ["{self.integrator}"]\n{setting}\n')
 
