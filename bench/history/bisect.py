@@ -122,7 +122,8 @@ def run_at(repository: Path, commit: str, configuration: Configuration, scratch:
             return f"status {row['status']}"
         if configuration.verdict not in frame.columns:
             raise RuntimeError(f"no column {configuration.verdict} at this commit")
-        return row[configuration.verdict]
+        value = row[configuration.verdict]
+        return float(value) if isinstance(value, (int, float)) else value
     finally:
         _git(repository, "worktree", "remove", "--force", str(tree))
         shutil.rmtree(folder, ignore_errors=True)
