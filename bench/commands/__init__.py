@@ -15,6 +15,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "selftest": ("selftest", "check an integrator (built-in or plug-in) against its declared facts"),
     "perf": ("perf", "measure the suite's own speed against C loops and bare libraries"),
     "advise": ("advise", "the cheapest integrator and setting for a scene and a target error"),
+    "history": ("history", "each stored run's verdicts and cost across code revisions, and what changed"),
+    "bisect": ("bisect", "the first commit between two revisions that changed one run's verdict"),
     "report": ("report", "build the HTML/Markdown report from a results database"),
     "seed": ("seed", "reproduce and correct the seed note's figures"),
     "simulate": ("simulate", "interactive simulation (or --save an animation)"),

@@ -28,6 +28,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --results: also check a matrix run that is not finished (status running or "
                              "interrupted: only some of its rows are stored), with a note; without it such a run "
                              "is refused (exit 2)")
+    parser.add_argument("--baseline", metavar="DB[:MATRIX_ID]",
+                        help="also compare with a finished matrix run of this database (default: its latest): an "
+                             "accuracy column that differs fails unless the thresholds file declares it an "
+                             "[[expected_change]]")
+    parser.add_argument("--cost", action="store_true",
+                        help="with --baseline: also fail on a CPU-time slowdown beyond the noise of both runs")
     parser.add_argument("--db", metavar="FILE",
                         help="when running a matrix: keep its results in this database (default: a temporary one)")
     parser.add_argument("--jobs", type=int, default=None, help="worker processes when running a matrix "
@@ -60,12 +66,25 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("--matrix-id selects a stored run: give it with --results")
     if args.db and args.results:
         raise InputError("--db is where a fresh matrix run is kept; with --results give the database there")
+    if args.cost and not args.baseline:
+        raise InputError("--cost compares costs with a baseline: give --baseline DB")
     if args.allow_unfinished and not args.results:
         raise InputError("--allow-unfinished is for a stored matrix run: give it with --results")
     matrix_file = None if args.results else _user_file(args.matrix or thresholds.matrix_to_run())
+    baseline_db, baseline_id = (None, None)
+    if args.baseline:
+        from foucault_bench.bench.gate.baseline import split_baseline
+
+        baseline_db, baseline_id = split_baseline(args.baseline)
     distinct_from_inputs({"--db": args.db, "--junit": args.junit},
-                         {"--thresholds": _user_file(args.thresholds), "--results": args.results, "--matrix": matrix_file},
-                         databases=("--results",))
+                         {"--thresholds": _user_file(args.thresholds), "--results": args.results, "--matrix": matrix_file,
+                          "--baseline": baseline_db},
+                         databases=("--results", "--baseline"))
+    baseline = None
+    if baseline_db is not None:
+        from foucault_bench.bench.gate.check import stored_rows_for_check
+
+        baseline = stored_rows_for_check(baseline_db, baseline_id, allow_unfinished=False)
     if args.results:
         from foucault_bench.bench.gate.check import stored_rows_for_check
 
@@ -80,6 +99,12 @@ def main(args: argparse.Namespace) -> int:
                                     progress=not args.no_progress, run_timeout_s=args.run_timeout)
     validate_against(thresholds, frame, what=what)
     outcomes = evaluate(thresholds, frame)
+    if baseline is not None:
+        from foucault_bench.bench.gate.baseline import baseline_outcomes
+
+        baseline_frame, baseline_what = baseline
+        outcomes += baseline_outcomes(thresholds, frame, baseline_frame, cost=args.cost,
+                                      what=f"the baseline {baseline_what}")
     print(f"checking {thresholds.source} against {what}", file=sys.stderr)
     unbounded = sorted(set(frame["integrator"]) - {outcome.integrator for outcome in outcomes})
     if unbounded:

@@ -27,6 +27,15 @@ Kinds of bound (``BOUND_KINDS``):
   ``relative_to = "rk4"`` compares with rk4 at the row's own setting; ``relative_to = {integrator = "rk4",
   kh = 0.25}`` (or ``tol``) at a fixed one.
 
+Expected changes (``[[expected_change]]``, for ``check --baseline``, ``bench.gate.baseline``): accuracy columns of
+the selected rows that may differ from the baseline run because a commit changed them on purpose::
+
+    [[expected_change]]
+    scene = "pantheon"
+    integrator = "verlet"            # or family; kh / tol as for a bound, none = every setting
+    columns = ["precession_rate_ref_error"]   # accuracy columns (bench.history.changes); none = all of them
+    basis = "commit abc1234: new turning-point interpolant"   # required: why the change is expected
+
 Setting match: the fixed-step loop shortens the requested step to fit a whole number of steps in each output
 interval (``integrators.fixed_step.uniform_output_stride``), so a stored row holds the effective kh. A bound's
 ``kh`` matches a row whose kh equals the requested value or the effective step that value gives on the row's
@@ -50,13 +59,17 @@ from foucault_bench.bench.validation import finite_number, read_toml, short_repr
 
 BUILT_IN_FOLDER = "thresholds"
 """Package folder of the built-in thresholds files (``bench/thresholds/NAME.toml``, package data)."""
-TOP_LEVEL_KEYS = ("description", "matrix", "bound")
 SELECTION_KEYS = ("scene", "integrator", "family", "kh", "tol", "kh_min", "kh_max")
+TOP_LEVEL_KEYS = ("description", "matrix", "bound", "expected_change")
+EXPECTED_CHANGE_KEYS = (*SELECTION_KEYS, "columns", "basis")
 BOUND_KINDS = ("max", "min", "max_abs", "status", "min_order", "max_ratio")
 UPPER_BOUNDS = ("max", "max_abs", "max_ratio")
 OTHER_KEYS = ("column", "relative_to", "basis")
 BOUND_KEYS = SELECTION_KEYS + BOUND_KINDS + OTHER_KEYS
 STATUSES = ("ok", "diverged", "failed")
+BASELINE_KINDS = {"baseline_accuracy": "accuracy as in the baseline",
+                  "baseline_cost": "cpu_time_s not above the baseline's beyond noise"}
+"""The checks ``check --baseline`` adds (``bench.gate.baseline``): not written in a file, numbered after its bounds."""
 
 ERROR_COLUMNS: tuple[str, ...] = tuple(name for name in VERDICT_COLUMNS if name != "energy_drift_per_s")
 """Non-negative error columns: the ones a convergence order can be fitted to."""
@@ -115,6 +128,8 @@ class Bound:
         """What must hold, e.g. ``precession_rate_ref_error <= 1e-06``."""
         if self.kind == "status":
             return f"status = {self.limit}"
+        if self.kind in BASELINE_KINDS:
+            return BASELINE_KINDS[self.kind]
         if self.kind == "min_order":
             return f"order of {self.column} >= {self.limit:g}"
         if self.kind == "max_ratio":
@@ -123,6 +138,17 @@ class Bound:
         operator = {"max": "<=", "min": ">=", "max_abs": "<="}[self.kind]
         column = f"abs({self.column})" if self.kind == "max_abs" else self.column
         return f"{column} {operator} {self.limit:g}"
+
+
+@dataclass(frozen=True)
+class ExpectedChange:
+    """An ``[[expected_change]]`` table: accuracy columns of the selected rows that may differ from a baseline
+    (``check --baseline``) because a commit changed them on purpose; ``columns`` empty means every one."""
+
+    number: int
+    selection: Selection
+    columns: tuple[str, ...]
+    basis: str
 
 
 @dataclass(frozen=True)
@@ -135,6 +161,7 @@ class Thresholds:
     bounds: tuple[Bound, ...]
     source: str
     directory: Path | None = None
+    expected_changes: tuple["ExpectedChange", ...] = ()
 
     def matrix_to_run(self) -> str | None:
         """The matrix to load: a file beside the thresholds file (or at an absolute path), else a built-in
@@ -191,16 +218,57 @@ def parse_thresholds(document: dict[str, Any], *, source: str = "thresholds",
         problems += own
         if not own:
             bounds.append(cast(Bound, bound))  # None only with a problem reported
+    changes = document.get("expected_change", [])
+    if not isinstance(changes, list) or not all(isinstance(table, dict) for table in changes):
+        problems.append(f"{source}: expected_change must be an array of tables ([[expected_change]] sections), "
+                        f"got {short_repr(changes)}")
+        changes = []
+    expected = []
+    for number, table in enumerate(changes, start=1):
+        where = f"{source}: expected_change #{number}"
+        own = []
+        change = _parse_expected_change(number, table, lambda message, where=where, own=own: own.append(f"{where}: {message}"))
+        problems += own
+        expected.append(change)
     if problems:
         raise InputError(problems)
     return Thresholds(description=description, matrix=matrix, bounds=tuple(bounds), source=source,
-                      directory=directory)
+                      directory=directory, expected_changes=tuple(expected))
 
 
 def _parse_bound(number: int, table: dict[str, Any], problem) -> Bound | None:
     for key in table:
         if key not in BOUND_KEYS:
             problem(f"unknown key {short_repr(key)}{suggestion(key, BOUND_KEYS)}; allowed keys: {', '.join(BOUND_KEYS)}")
+    selection = _parse_selection(table, problem)
+
+    kinds = [kind for kind in BOUND_KINDS if kind in table]
+    if len(kinds) != 1:
+        problem(f"give exactly one kind of bound ({', '.join(BOUND_KINDS)}), got {', '.join(kinds) or 'none'}")
+        return None
+    kind = kinds[0]
+    column = table.get("column")
+    limit = _limit(kind, table, problem)
+    _check_column(kind, column, problem)
+    if kind == "min_order" and selection.tol:
+        problem("min_order is fitted across fixed-step settings (kh), not tolerances")
+    relative_to = _counterpart(kind, table.get("relative_to"), problem)
+    basis = table.get("basis", "")
+    if not isinstance(basis, str):
+        problem(f"basis must be a string (where the number comes from), got {short_repr(basis)}")
+    return Bound(
+        number=number,
+        selection=selection,
+        kind=kind,
+        limit=limit,
+        column=column,
+        relative_to=relative_to,
+        basis=basis if isinstance(basis, str) else "",
+    )
+
+
+def _parse_selection(table: dict[str, Any], problem) -> Selection:
+    """The rows a bound or an expected change selects (``Selection``), every problem reported."""
     scenes = _names(table, "scene", problem)
     if "scene" not in table:
         problem("scene: missing (a scene name or a list of names)")
@@ -221,30 +289,26 @@ def _parse_bound(number: int, table: dict[str, Any], problem) -> Bound | None:
     if kh_min is not None and kh_max is not None and kh_min > kh_max:
         problem(f"kh_min = {kh_min:g} is above kh_max = {kh_max:g}")
 
-    kinds = [kind for kind in BOUND_KINDS if kind in table]
-    if len(kinds) != 1:
-        problem(f"give exactly one kind of bound ({', '.join(BOUND_KINDS)}), got {', '.join(kinds) or 'none'}")
-        return None
-    kind = kinds[0]
-    column = table.get("column")
-    limit = _limit(kind, table, problem)
-    _check_column(kind, column, problem)
-    if kind == "min_order" and tol:
-        problem("min_order is fitted across fixed-step settings (kh), not tolerances")
-    relative_to = _counterpart(kind, table.get("relative_to"), problem)
-    basis = table.get("basis", "")
-    if not isinstance(basis, str):
-        problem(f"basis must be a string (where the number comes from), got {short_repr(basis)}")
-    return Bound(
-        number=number,
-        selection=Selection(scenes=tuple(scenes), integrators=tuple(integrators), family=family, kh=tuple(kh),
-                            tol=tuple(tol), kh_min=kh_min, kh_max=kh_max),
-        kind=kind,
-        limit=limit,
-        column=column,
-        relative_to=relative_to,
-        basis=basis if isinstance(basis, str) else "",
-    )
+    return Selection(scenes=tuple(scenes), integrators=tuple(integrators), family=family, kh=tuple(kh),
+                     tol=tuple(tol), kh_min=kh_min, kh_max=kh_max)
+
+
+def _parse_expected_change(number: int, table: dict[str, Any], problem) -> ExpectedChange:
+    from foucault_bench.bench.history.changes import ACCURACY_COLUMNS
+
+    for key in table:
+        if key not in EXPECTED_CHANGE_KEYS:
+            problem(f"unknown key {short_repr(key)}{suggestion(key, EXPECTED_CHANGE_KEYS)}; allowed keys: "
+                    f"{', '.join(EXPECTED_CHANGE_KEYS)}")
+    selection = _parse_selection(table, problem)
+    columns = _names(table, "columns", problem)
+    for column in columns:
+        if column not in ACCURACY_COLUMNS:
+            problem(f"columns: {short_repr(column)} is not an accuracy column{suggestion(column, ACCURACY_COLUMNS)}")
+    basis = table.get("basis")
+    if not (isinstance(basis, str) and basis.strip()):
+        problem("basis: missing (say why the change is expected, e.g. the commit and what it changed)")
+    return ExpectedChange(number, selection, tuple(columns), basis if isinstance(basis, str) else "")
 
 
 def _names(table: dict[str, Any], key: str, problem) -> list[str]:

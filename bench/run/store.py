@@ -270,6 +270,8 @@ class ResultsStore:
             raise InputError(f"{self.path}: no matrix runs stored yet")
         if text in (None, "latest"):
             return ids[-1]
+        if text in ids:  # an exact id, even where it is also the prefix of another
+            return text
         matches = [matrix_id for matrix_id in ids if matrix_id.startswith(text)]
         if len(matches) != 1:
             kind = "no" if not matches else "more than one"
