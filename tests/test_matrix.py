@@ -163,7 +163,7 @@ def test_built_in_matrices_load_and_cover_every_built_in_family():
     builtin = load_scene_files([SCENE_DIRECTORY / "builtin.toml"])
     halls = set(SCENES) - set(builtin)
     assert {scene.name for scene in default.scenes} == set(builtin)
-    assert {scene.name for scene in load_matrix("halls").scenes} == halls
+    assert halls <= {scene.name for scene in load_matrix("halls").scenes}
     tolerances = sorted({run.tol for run in default.runs if run.tol is not None})
     assert tolerances[0] <= 1e-13 and tolerances[-1] >= 1e-4
 

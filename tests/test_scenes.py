@@ -134,7 +134,7 @@ def test_every_built_in_scene_round_trips_through_toml_to_the_last_bit(name: str
 
 def test_every_file_of_the_scene_folder_is_read_in_name_order_and_a_name_twice_is_an_error(tmp_path) -> None:
     """A second scene file (such as bench/scenes/real_halls.toml) adds its scenes after the first file's and may
-    start from them; a name another file defines, or a key other than [scene.NAME], is refused naming the file."""
+    start from them; a name another file defines, or a key other than [scene.NAME], is refused naming the file (a [measurement.NAME] table is allowed: real halls' measured rates)."""
     (tmp_path / "builtin.toml").write_bytes((SCENE_DIRECTORY / "builtin.toml").read_bytes())
     (tmp_path / "more.toml").write_text('[scene.pantheon_2h]\nbase = "pantheon"\nduration_s = 7200.0\n',
                                         encoding="utf-8")
@@ -147,7 +147,8 @@ def test_every_file_of_the_scene_folder_is_read_in_name_order_and_a_name_twice_i
     with pytest.raises(InputError) as error:
         load_scene_files(sorted(tmp_path.glob("*.toml")))
     assert error.value.problems == [
-        f"{twice}: unknown key 'title'; a scene file holds only [scene.NAME] tables",
+        f"{twice}: unknown key 'title'; a scene file holds [scene.NAME] tables and, for real halls, "
+        "[measurement.NAME] tables (their measured rates, read by the report)",
         f"{twice}: scene.lab_3m: the name 'lab_3m' is taken by a scene of builtin.toml; choose another name",
     ]
 
