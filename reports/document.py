@@ -51,12 +51,14 @@ class Paragraph:
 class Figure:
     """An image pair ``<stem>.png`` / ``<stem>.svg`` (stem relative to the document's folder), and optionally
     the same chart as a plotly figure (``interactive``: its JSON; ``points``: how many markers it draws), which
-    the HTML rendering shows instead of the PNG (with links to the PNG and SVG)."""
+    the HTML rendering shows instead of the PNG (with links to the PNG and SVG). ``static`` false: no PNG or SVG
+    was written (a report built without ``--static``); REPORT.md then points to the chart in index.html."""
 
     stem: str
     caption: str
     interactive: str | None = None
     points: int = 0
+    static: bool = True
 
 
 @dataclass
@@ -244,10 +246,14 @@ def render_markdown(title: str, blocks: list[Block]) -> str:
             lines += ["#" * block.level + " " + markdown_text(block.text), ""]
         elif isinstance(block, Paragraph):
             lines += [_inline_markdown(block.text), ""]
-        elif isinstance(block, Figure):
+        elif isinstance(block, Figure) and block.static:
             caption = _inline_markdown(block.caption)
             lines += [f"![{caption}]({_url(block.stem + '.png')})", "",
                       f"*{caption}* ([SVG]({_url(block.stem + '.svg')}))", ""]
+        elif isinstance(block, Figure):
+            lines += [f"*{_inline_markdown(block.caption)}* (interactive chart in "
+                      f"[index.html](index.html#{_figure_anchor(block)}); static PNG and SVG: "
+                      "`foucault-bench report --static`)", ""]
         elif isinstance(block, Table):
             links = ", ".join(f"[{kind}]({_url(path)})" for kind, path in _table_links(block.stem))
             table = markdown_table(block.display)
@@ -312,17 +318,24 @@ def _anchors(blocks: list[Block]) -> dict[int, str]:
     return anchors
 
 
+def _figure_anchor(block: Figure) -> str:
+    """The id of a chart's figure element in index.html: its file stem's name (unique per report)."""
+    return "figure-" + block.stem.rsplit("/", 1)[-1]
+
+
 def _interactive_html(block: Figure, number: int) -> str:
     """A plotly chart: its div (``data-points``: the markers it should draw) and the script drawing it."""
     chart_id = f"chart-{number}"
+    static = (f" (static: <a href='{_attribute(_url(block.stem + '.png'))}'>PNG</a>, "
+              f"<a href='{_attribute(_url(block.stem + '.svg'))}'>SVG</a>)") if block.static else ""
     figure_json = cast(str, block.interactive).replace("<", "\\u003c")  # JSON strings only: no </script> or <!-- ends it
-    return (f"<figure><div class='chart' id='{chart_id}' data-points='{int(block.points)}'></div><script>"
+    return (f"<figure id='{_attribute(_figure_anchor(block))}'><div class='chart' id='{chart_id}' "
+            f"data-points='{int(block.points)}'></div><script>"
             f"(function () {{ var figure = {figure_json}; "
             f"Plotly.newPlot('{chart_id}', figure.data, figure.layout, {{responsive: true, displaylogo: false}})"
             f".then(function (chart) {{ chart.on('plotly_legendclick', function (event) "
             f"{{ return foucaultLegendClick(chart, event); }}); }}); }})();</script>"
-            f"<figcaption>{_inline_html(block.caption)} (static: <a href='{_attribute(_url(block.stem + '.png'))}'>"
-            f"PNG</a>, <a href='{_attribute(_url(block.stem + '.svg'))}'>SVG</a>)</figcaption></figure>")
+            f"<figcaption>{_inline_html(block.caption)}{static}</figcaption></figure>")
 
 
 def render_html(title: str, blocks: list[Block]) -> str:
