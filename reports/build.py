@@ -163,12 +163,12 @@ class _Builder:
         self.blocks.append(Paragraph(""))
 
     def figure(self, name: str, caption: str, draw: Callable[[Path], Path],
-               draw_interactive: Callable[[], PlotlyFigure] | None = None) -> None:
+               draw_interactive: Callable[[], PlotlyFigure] | None = None, beside: bool = False) -> None:
         """Add a chart to the page; ``draw_figures`` later writes the static chart ``draw(stem)`` under figures/
         (when the report is static) and, when the report is interactive, puts the plotly figure
-        ``draw_interactive()`` on the page."""
+        ``draw_interactive()`` on the page; ``beside``: to the right of the table just added."""
         static = self.static or not (self.interactive and draw_interactive is not None)
-        self.later(name, partial(_render_figure, Figure(f"{FIGURES}/{name}", caption, static=static),
+        self.later(name, partial(_render_figure, Figure(f"{FIGURES}/{name}", caption, static=static, beside=beside),
                                  self.folder / FIGURES / name, draw, draw_interactive if self.interactive else None))
 
     def curves(self, name: str, caption: str, draw: Callable[[pd.DataFrame], MplFigure], table: pd.DataFrame) -> None:
@@ -277,7 +277,7 @@ def _overview(builder: _Builder, inputs: ReportInputs) -> None:
     names = sorted(runs["scene"].unique())
     builder.add(Heading("Scenes", level=3))
     builder.table(tables.scenes_table([SCENES[name] for name in names if name in SCENES], runs), "scenes",
-                  "The scenes: place, pendulum, release, grid, model and why")
+                  "The scenes: place, pendulum, release, grid, model and why", collapsible=True)
 
 
 def _decisions(builder: _Builder, runs: pd.DataFrame, targets: tuple[float, ...]) -> None:
@@ -325,16 +325,50 @@ def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
     builder.add(Paragraph(cost_basis_sentences(runs)))
     for scene, scene_runs in runs.groupby("scene", sort=True):
         builder.add(Heading(f"Scene {scene}", level=3))
-        for verdict, (title, label) in charts.VERDICT_LABELS.items():
+        for verdict, (title, _) in charts.VERDICT_LABELS.items():
             if not scene_runs[verdict].notna().any() and (scene_runs["status"] == STATUS_OK).any():
                 builder.add(Paragraph(f"{scene}: no {title} values in the results ({verdict} is empty)."))
-                continue
-            front = pareto_front(scene_runs, verdict)
-            builder.figure(f"work_precision_{file_stem(scene)}_{verdict}",
-                           f"{scene}: {title} ({label}) against time and accepted steps; "
-                           f"{_front_words(scene_runs, verdict, front)}.",
-                           partial(charts.work_precision, scene_runs, verdict, front),
-                           partial(interactive.work_precision, scene_runs, verdict, front))
+            elif verdict == RECOMMENDATION_METRIC:
+                builder.add(Paragraph(f"{scene}: the {title} chart is beside the scene's recommendations "
+                                      "at the top of the report."))
+            else:
+                _work_precision_figure(builder, str(scene), scene_runs, verdict)
+
+
+def _work_precision_figure(builder: _Builder, scene: str, scene_runs: pd.DataFrame, verdict: str,
+                           beside: bool = False) -> None:
+    title, label = charts.VERDICT_LABELS[verdict]
+    front = pareto_front(scene_runs, verdict)
+    builder.figure(f"work_precision_{file_stem(scene)}_{verdict}",
+                   f"{scene}: {title} ({label}) against time and accepted steps; "
+                   f"{_front_words(scene_runs, verdict, front)}.",
+                   partial(charts.work_precision, scene_runs, verdict, front),
+                   partial(interactive.work_precision, scene_runs, verdict, front), beside=beside)
+
+
+RECOMMENDATION_METRIC = "reference_error"
+"""The error the recommendations rank by (the matched-accuracy summary's)."""
+RECOMMENDATION_COLUMNS = ("target", "outcome", "integrator", "setting", "error", "runner_up", "ratio")
+"""The columns of the matched-accuracy summary a scene's recommendation shows (with the cost column)."""
+
+
+def _recommendations(builder: _Builder, runs: pd.DataFrame, targets: tuple[float, ...]) -> None:
+    """The first section: per scene, the cheapest integrator and setting at each target reference error
+    (``tables.matched_accuracy``, the answer `foucault-bench advise` gives from the stored runs), beside the
+    scene's work-precision chart of that error."""
+    builder.add(Heading("Which method for my scene"), Paragraph(
+        f"Per scene and target reference error, the cheapest integrator and setting that meets it (by "
+        f"{_cost_words(runs)}), the runner-up integrator and its cost ratio; beside it the scene's reference "
+        "error against cost. The full summary, the Pareto fronts and every other chart follow."))
+    summary = tables.matched_accuracy(runs, targets)
+    cost = cost_column(runs)
+    for scene, scene_runs in runs.groupby("scene", sort=True):
+        rows = summary[summary["scene"] == scene]
+        columns = [*RECOMMENDATION_COLUMNS[:5], cost, *RECOMMENDATION_COLUMNS[5:]]
+        builder.table(rows[columns].reset_index(drop=True), f"recommendation_{file_stem(str(scene))}",
+                      f"{scene}: recommended method per target reference error")
+        if scene_runs[RECOMMENDATION_METRIC].notna().any() or not (scene_runs["status"] == STATUS_OK).any():
+            _work_precision_figure(builder, str(scene), scene_runs, RECOMMENDATION_METRIC, beside=True)
 
 
 def _front_words(scene_runs: pd.DataFrame, verdict: str, front: pd.DataFrame) -> str:
@@ -593,6 +627,7 @@ def build_report(inputs: ReportInputs, folder: Path, title: str = "foucault-benc
     if inputs.runs.empty:
         raise InputError("no runs to report on")
     builder = _Builder(folder, progress, inputs.interactive, inputs.static, inputs.jobs)
+    _recommendations(builder, inputs.runs, inputs.targets)
     _overview(builder, inputs)
     _decisions(builder, inputs.runs, inputs.targets)
     _work_precision(builder, inputs.runs)
