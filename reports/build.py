@@ -348,7 +348,7 @@ def _work_precision_figure(builder: _Builder, scene: str, scene_runs: pd.DataFra
 
 RECOMMENDATION_METRIC = "reference_error"
 """The error the recommendations rank by (the matched-accuracy summary's)."""
-RECOMMENDATION_COLUMNS = ("target", "outcome", "integrator", "setting", "error", "runner_up", "ratio")
+RECOMMENDATION_COLUMNS = ("scene", "target", "outcome", "integrator", "setting", "error", "runner_up", "ratio")
 """The columns of the matched-accuracy summary a scene's recommendation shows (with the cost column)."""
 
 
@@ -364,7 +364,7 @@ def _recommendations(builder: _Builder, runs: pd.DataFrame, targets: tuple[float
     cost = cost_column(runs)
     for scene, scene_runs in runs.groupby("scene", sort=True):
         rows = summary[summary["scene"] == scene]
-        columns = [*RECOMMENDATION_COLUMNS[:5], cost, *RECOMMENDATION_COLUMNS[5:]]
+        columns = [*RECOMMENDATION_COLUMNS[:6], cost, *RECOMMENDATION_COLUMNS[6:]]
         builder.table(rows[columns].reset_index(drop=True), f"recommendation_{file_stem(str(scene))}",
                       f"{scene}: recommended method per target reference error")
         if scene_runs[RECOMMENDATION_METRIC].notna().any() or not (scene_runs["status"] == STATUS_OK).any():
