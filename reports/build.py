@@ -1,12 +1,14 @@
 """``foucault-bench report``: build the report folder (index.html, REPORT.md, figures, tables) from results.
 
     foucault-bench report [--db PATH] [--matrix-id ID] [--out DIR] [--force] [--studies {stored,recompute,skip}]
-                          [--targets ERROR ...]
+                          [--targets ERROR ...] [--static] [--jobs N]
 
 The folder opens in a browser with no server and no network: index.html and REPORT.md hold the same blocks
 (``reports.document``); in index.html every chart of the results and studies is interactive (plotly,
-``reports.interactive``; plotly.js is written beside it), and each links its static PNG + SVG files under
-``figures/`` (``reports.charts``, matplotlib, for papers; REPORT.md shows these). Tables are embedded and
+``reports.interactive``; plotly.js is written beside it). With ``--static`` each chart also has its static
+PNG + SVG files under ``figures/`` (``reports.charts``, matplotlib, for papers), which REPORT.md shows and
+index.html links; without it REPORT.md links each chart in index.html. The figures are drawn by ``--jobs``
+worker processes (default: one per CPU), in the page's order whatever order they finish in. Tables are embedded and
 written under ``tables/`` as CSV, Markdown, LaTeX and HTML. The summary answers which integrator and setting
 is cheapest per scene at each target error (``--targets``, default 1e-3 1e-6 1e-9 1e-12), with the Pareto fronts of
 every error metric (``bench.verdicts.pareto``). File names made from scene names go through ``file_stem``. The study tables (``bench.studies``) are read from the database
@@ -19,13 +21,15 @@ small fixture without a database.
 
 from __future__ import annotations
 
+import multiprocessing
+import multiprocessing.context
 import os
 import sys
 import time
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Callable, Iterator
 
 import pandas as pd
 from foucault_bench.bench.atomic import replacing_folder
@@ -79,6 +83,9 @@ class ReportInputs:
         include_seed: add the seed-revisited section (computes the seed study, a few seconds).
         targets: target reference errors of the matched-accuracy summary.
         interactive: draw the charts of index.html with plotly (else the static PNGs only).
+        static: write every chart's PNG and SVG under figures/ (else only those of the charts that are not
+            interactive, and of the seed section); REPORT.md shows the static files or links to index.html.
+        jobs: worker processes drawing the figures (1: in this process).
     """
 
     runs: pd.DataFrame
@@ -88,6 +95,8 @@ class ReportInputs:
     include_seed: bool = True
     targets: tuple[float, ...] = DEFAULT_TARGETS
     interactive: bool = True
+    static: bool = True
+    jobs: int = 1
 
 
 def file_stem(name: str) -> str:
@@ -111,50 +120,126 @@ def file_stem(name: str) -> str:
     return "".join(parts)
 
 
+_PENDING: list[Callable[[], list[Block]]] = []
+"""The figures of the report being built, read by the worker processes of ``_Builder.draw_figures`` (which
+inherit it by fork: nothing is pickled but the blocks they return)."""
+
+
+def _draw_pending(position: int) -> tuple[int, list[Block]]:
+    return position, _PENDING[position]()
+
+
+def _fork_context() -> multiprocessing.context.BaseContext | None:
+    """The fork start method where the platform has it (worker processes inherit the figures to draw), else
+    ``None`` (the figures are drawn in this process)."""
+    return multiprocessing.get_context("fork") if "fork" in multiprocessing.get_all_start_methods() else None
+
+
 class _Builder:
     """Collects blocks while writing the figures and tables they point to."""
 
-    def __init__(self, folder: Path, progress: bool, interactive: bool):
+    def __init__(self, folder: Path, progress: bool, interactive: bool, static: bool = True, jobs: int = 1):
         self.folder = folder
         self.blocks: list[Block] = []
         self.interactive = interactive
+        self.static = static
         self.progress = progress
-        self.pending: list[Callable[[], None]] = []
-        """Figures to draw, in order: drawn by ``draw_figures`` once the total is known."""
+        self.jobs = jobs
+        self.pending: list[tuple[int, str, Callable[[], list[Block]]]] = []
+        """Blocks still to draw, in order: (place in ``blocks``, what it is, the function returning the blocks
+        that take that place), drawn by ``draw_figures`` once the total is known."""
+        self.first: set[int] = set()
+        """Indices in ``pending`` of the long tasks, started before the others so that they do not finish last."""
 
     def add(self, *blocks: Block) -> None:
         self.blocks.extend(blocks)
 
+    def later(self, what: str, draw: Callable[[], list[Block]], long: bool = False) -> None:
+        """Keep a place for the blocks ``draw()`` returns (figures, which ``draw_figures`` draws in parallel);
+        ``what`` names them in the progress bar; ``long`` starts them first."""
+        if long:
+            self.first.add(len(self.pending))
+        self.pending.append((len(self.blocks), what, draw))
+        self.blocks.append(Paragraph(""))
+
     def figure(self, name: str, caption: str, draw: Callable[[Path], Path],
-               draw_interactive: Callable[[], PlotlyFigure] | None = None) -> None:
+               draw_interactive: Callable[[], PlotlyFigure] | None = None, beside: bool = False) -> None:
         """Add a chart to the page; ``draw_figures`` later writes the static chart ``draw(stem)`` under figures/
-        and, when the report is interactive, puts the plotly figure ``draw_interactive()`` on the page."""
-        block = Figure(f"{FIGURES}/{name}", caption)
-        self.add(block)
+        (when the report is static) and, when the report is interactive, puts the plotly figure
+        ``draw_interactive()`` on the page; ``beside``: to the right of the table just added."""
+        static = self.static or not (self.interactive and draw_interactive is not None)
+        self.later(name, partial(_render_figure, Figure(f"{FIGURES}/{name}", caption, static=static, beside=beside),
+                                 self.folder / FIGURES / name, draw, draw_interactive if self.interactive else None))
 
-        def render() -> None:
-            draw(self.folder / FIGURES / name)
-            if self.interactive and draw_interactive is not None:
-                plot = draw_interactive()
-                block.interactive, block.points = plot.to_json(), interactive.drawn_points(plot)
-
-        self.pending.append(render)
-
-    def curves(self, name: str, caption: str, figure: MplFigure) -> None:
-        """A chart of curves drawn with matplotlib: saved under figures/, and on the page converted to plotly
-        (``interactive.from_matplotlib``)."""
-        self.figure(name, caption, partial(charts.save, figure), partial(interactive.from_matplotlib, figure))
+    def curves(self, name: str, caption: str, draw: Callable[[pd.DataFrame], MplFigure], table: pd.DataFrame) -> None:
+        """A chart of curves drawn with matplotlib (``draw(table)``): saved under figures/, and on the page
+        converted to plotly (``interactive.from_matplotlib``)."""
+        block = Figure(f"{FIGURES}/{name}", caption, static=self.static or not self.interactive)
+        self.later(name, partial(_render_curves, block, self.folder / FIGURES / name, draw, table, self.interactive))
 
     def draw_figures(self) -> None:
-        """Draw the collected figures, with a counter that knows the total (and so shows an ETA)."""
-        for draw in tqdm(self.pending, total=len(self.pending), desc="report figures", unit="figure",
-                         disable=not self.progress, leave=False):
-            draw()
+        """Draw the pending figures, on ``jobs`` worker processes when there are several, with a counter that
+        knows the total (and so shows an ETA) and names the figure last drawn; blocks keep their order."""
+        bar = tqdm(total=len(self.pending), desc="report figures", unit="figure", disable=not self.progress,
+                   leave=False)
+        context = _fork_context()
+        jobs = min(self.jobs, len(self.pending))
+        order = sorted(range(len(self.pending)), key=lambda index: index not in self.first)
+        _PENDING[:] = [self.pending[index][2] for index in order]
+        try:
+            if jobs > 1 and context is not None:
+                with context.Pool(jobs) as pool:
+                    drawn = self._collect(order, pool.imap_unordered(_draw_pending, range(len(order))), bar)
+            else:
+                drawn = self._collect(order, map(_draw_pending, range(len(order))), bar)
+        finally:
+            _PENDING.clear()
+            bar.close()
+        for index in sorted(drawn, key=lambda index: -self.pending[index][0]):
+            place = self.pending[index][0]
+            self.blocks[place:place + 1] = drawn[index]
+        self.pending, self.first = [], set()
+
+    def _collect(self, order: list[int], results: Iterator[tuple[int, list[Block]]],
+                 bar: tqdm) -> dict[int, list[Block]]:
+        """The blocks of each pending task by its index in ``pending`` (``results``: position in ``order``,
+        blocks, in any order), counted on ``bar``."""
+        drawn = {}
+        for position, blocks in results:
+            index = order[position]
+            drawn[index] = blocks
+            bar.set_postfix_str(self.pending[index][1], refresh=False)
+            bar.update()
+        return drawn
 
     def table(self, frame: pd.DataFrame, name: str, title: str, notes: dict[str, str] | None = None,
               collapsible: bool = False) -> None:
         shown = write_table_files(frame, self.folder, f"{TABLES}/{name}", title, tables.COLUMN_FORMATS)
         self.add(Table(title, shown, f"{TABLES}/{name}", tables.notes_for(frame, notes), collapsible))
+
+
+def _render_figure(block: Figure, stem: Path, draw: Callable[[Path], Path],
+                   draw_interactive: Callable[[], PlotlyFigure] | None) -> list[Block]:
+    """Draw one chart: its static files when ``block.static``, its plotly figure when ``draw_interactive``."""
+    if block.static:
+        draw(stem)
+    if draw_interactive is not None:
+        plot = draw_interactive()
+        block.interactive, block.points = plot.to_json(), interactive.drawn_points(plot)
+    return [block]
+
+
+def _render_curves(block: Figure, stem: Path, draw: Callable[[pd.DataFrame], MplFigure], table: pd.DataFrame,
+                   on_page: bool) -> list[Block]:
+    """Draw one matplotlib chart ``draw(table)``: its static files when ``block.static``, and its plotly
+    conversion when ``on_page``."""
+    figure = draw(table)
+    if block.static:
+        charts.save(figure, stem)
+    if on_page:
+        plot = interactive.from_matplotlib(figure)
+        block.interactive, block.points = plot.to_json(), interactive.drawn_points(plot)
+    return [block]
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -192,7 +277,7 @@ def _overview(builder: _Builder, inputs: ReportInputs) -> None:
     names = sorted(runs["scene"].unique())
     builder.add(Heading("Scenes", level=3))
     builder.table(tables.scenes_table([SCENES[name] for name in names if name in SCENES], runs), "scenes",
-                  "The scenes: place, pendulum, release, grid, model and why")
+                  "The scenes: place, pendulum, release, grid, model and why", collapsible=True)
 
 
 def _decisions(builder: _Builder, runs: pd.DataFrame, targets: tuple[float, ...]) -> None:
@@ -241,16 +326,50 @@ def _work_precision(builder: _Builder, runs: pd.DataFrame) -> None:
     builder.add(Paragraph(cost_basis_sentences(runs)))
     for scene, scene_runs in runs.groupby("scene", sort=True):
         builder.add(Heading(f"Scene {scene}", level=3))
-        for verdict, (title, label) in charts.VERDICT_LABELS.items():
+        for verdict, (title, _) in charts.VERDICT_LABELS.items():
             if not scene_runs[verdict].notna().any() and (scene_runs["status"] == STATUS_OK).any():
                 builder.add(Paragraph(f"{scene}: no {title} values in the results ({verdict} is empty)."))
-                continue
-            front = pareto_front(scene_runs, verdict)
-            builder.figure(f"work_precision_{file_stem(scene)}_{verdict}",
-                           f"{scene}: {title} ({label}) against time and accepted steps; "
-                           f"{_front_words(scene_runs, verdict, front)}.",
-                           partial(charts.work_precision, scene_runs, verdict, front),
-                           partial(interactive.work_precision, scene_runs, verdict, front))
+            elif verdict == RECOMMENDATION_METRIC:
+                builder.add(Paragraph(f"{scene}: the {title} chart is beside the scene's recommendations "
+                                      "at the top of the report."))
+            else:
+                _work_precision_figure(builder, str(scene), scene_runs, verdict)
+
+
+def _work_precision_figure(builder: _Builder, scene: str, scene_runs: pd.DataFrame, verdict: str,
+                           beside: bool = False) -> None:
+    title, label = charts.VERDICT_LABELS[verdict]
+    front = pareto_front(scene_runs, verdict)
+    builder.figure(f"work_precision_{file_stem(scene)}_{verdict}",
+                   f"{scene}: {title} ({label}) against time and accepted steps; "
+                   f"{_front_words(scene_runs, verdict, front)}.",
+                   partial(charts.work_precision, scene_runs, verdict, front),
+                   partial(interactive.work_precision, scene_runs, verdict, front), beside=beside)
+
+
+RECOMMENDATION_METRIC = "reference_error"
+"""The error the recommendations rank by (the matched-accuracy summary's)."""
+RECOMMENDATION_COLUMNS = ("scene", "target", "outcome", "integrator", "setting", "error", "runner_up", "ratio")
+"""The columns of the matched-accuracy summary a scene's recommendation shows (with the cost column)."""
+
+
+def _recommendations(builder: _Builder, runs: pd.DataFrame, targets: tuple[float, ...]) -> None:
+    """The first section: per scene, the cheapest integrator and setting at each target reference error
+    (``tables.matched_accuracy``, the answer `foucault-bench advise` gives from the stored runs), beside the
+    scene's work-precision chart of that error."""
+    builder.add(Heading("Which method for my scene"), Paragraph(
+        f"Per scene and target reference error, the cheapest integrator and setting that meets it (by "
+        f"{_cost_words(runs)}), the runner-up integrator and its cost ratio; beside it the scene's reference "
+        "error against cost. The full summary, the Pareto fronts and every other chart follow."))
+    summary = tables.matched_accuracy(runs, targets)
+    cost = cost_column(runs)
+    for scene, scene_runs in runs.groupby("scene", sort=True):
+        rows = summary[summary["scene"] == scene]
+        columns = [*RECOMMENDATION_COLUMNS[:6], cost, *RECOMMENDATION_COLUMNS[6:]]
+        builder.table(rows[columns].reset_index(drop=True), f"recommendation_{file_stem(str(scene))}",
+                      f"{scene}: recommended method per target reference error")
+        if scene_runs[RECOMMENDATION_METRIC].notna().any() or not (scene_runs["status"] == STATUS_OK).any():
+            _work_precision_figure(builder, str(scene), scene_runs, RECOMMENDATION_METRIC, beside=True)
 
 
 def _front_words(scene_runs: pd.DataFrame, verdict: str, front: pd.DataFrame) -> str:
@@ -375,7 +494,7 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
                        "error so far (its running maximum), which separates bounded, drifting and growing errors; "
                        "faint line of the same colour: the error at each output time, whose oscillation the "
                        "maximum hides (a symplectic method's error swings within a band every half period).",
-                       charts.long_time_energy(energy))
+                       charts.long_time_energy, energy)
         builder.table(tables.long_time_summary(energy), "study_long_time_energy_summary",
                       "Long-time energy: error after the first hour and at the end")
     stability = studies.get("study_stability")
@@ -392,10 +511,10 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
             "curves dip or end there."))
         builder.curves("study_stability", "Energy error against k·h across each fixed-step integrator's stability "
                        "limit, without rotation (solid) and with it (dashed); triangles mark the measured limits.",
-                       charts.stability(stability))
+                       charts.stability, stability)
         builder.curves("study_stability_rotation_growth",
                        "Growth per step with Earth's rotation: measured one-step growth against the declared law.",
-                       charts.rotation_growth(stability))
+                       charts.rotation_growth, stability)
         builder.table(tables.stability_summary(stability), "study_stability_summary",
                       "Stability: declared and measured limits, first divergence, growth with rotation")
     precession = studies.get("study_precession_latitude")
@@ -410,7 +529,7 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
             f"it is {residual:.2g} Ω_E (release-side terms, docs/models/README.md \"Airy precession\")."))
         builder.curves("study_precession_latitude",
                        "Precession rate against latitude; residual from −Ω_E sin φ in units of Ω_E.",
-                       charts.precession_latitude(precession))
+                       charts.precession_latitude, precession)
 
     azimuth = studies.get("study_release_azimuth")
     if azimuth is not None:
@@ -468,7 +587,7 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
         builder.add(Heading("Precession error against the release direction"), Paragraph(text))
         builder.curves("study_release_azimuth",
                        "Precession-rate error relative to Ω_E against the release azimuth, per latitude.",
-                       charts.release_azimuth(azimuth))
+                       charts.release_azimuth, azimuth)
 
 
 def _adequacy(builder: _Builder, adequacy: pd.DataFrame) -> None:
@@ -484,7 +603,7 @@ def _adequacy(builder: _Builder, adequacy: pd.DataFrame) -> None:
                    "model's precession rate is from the richer one's, in units of Ω_E|sin φ|. Right panel, 'Path "
                    "missed': the largest distance between the two models' paths, in units of the amplitude A. "
                    "Filled: measured; hollow: the leading-order expectation where the physics gives one.",
-                   charts.adequacy(adequacy))
+                   charts.adequacy, adequacy)
     builder.table(adequacy, "model_adequacy", "Model adequacy per scene", tables.ADEQUACY_NOTES)
 
 
@@ -508,7 +627,8 @@ def build_report(inputs: ReportInputs, folder: Path, title: str = "foucault-benc
         raise InputError(f"results lack the columns {', '.join(missing)} (see bench/schema.py)")
     if inputs.runs.empty:
         raise InputError("no runs to report on")
-    builder = _Builder(folder, progress, inputs.interactive)
+    builder = _Builder(folder, progress, inputs.interactive, inputs.static, inputs.jobs)
+    _recommendations(builder, inputs.runs, inputs.targets)
     _overview(builder, inputs)
     _decisions(builder, inputs.runs, inputs.targets)
     _work_precision(builder, inputs.runs)
@@ -517,7 +637,7 @@ def build_report(inputs: ReportInputs, folder: Path, title: str = "foucault-benc
     _adequacy(builder, inputs.adequacy)
     halls.add_section(builder, inputs.runs)
     if inputs.include_seed:
-        builder.add(*seed_blocks(folder, "seed"))
+        builder.later("seed section", partial(seed_blocks, folder, "seed"), long=True)
     _all_runs(builder, inputs.runs)
     builder.draw_figures()
     return write_document(folder, title, builder.blocks)
@@ -539,9 +659,10 @@ def _provenance(store: ResultsStore, matrix_id: str) -> dict[str, str]:
 
 
 def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "stored",
-                 targets: tuple[float, ...] = DEFAULT_TARGETS) -> int:
+                 targets: tuple[float, ...] = DEFAULT_TARGETS, static: bool = False, jobs: int = 1) -> int:
     """``foucault-bench report``: the report of matrix run ``matrix_id`` (``None``: the latest) of database
-    ``db`` written to folder ``out``; ``studies`` is ``stored``, ``recompute`` or ``skip``. Exit status 0.
+    ``db`` written to folder ``out``; ``studies`` is ``stored``, ``recompute`` or ``skip``; ``static`` writes
+    every chart's PNG and SVG; ``jobs`` worker processes draw the figures. Exit status 0.
 
     The report is built in a staging folder beside ``out`` and swapped in whole once complete
     (``bench.atomic.replacing_folder``; the command checks ``out`` first): a kill or a full disk leaves the
@@ -560,7 +681,7 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
         study_tables = {} if studies == "skip" else _study_tables(store, db, recompute=studies == "recompute")
         inputs = ReportInputs(runs=runs, studies=study_tables, adequacy=adequacy,
                               provenance={"database": str(db), **_provenance(store, matrix_id)},
-                              targets=targets)
+                              targets=targets, static=static, jobs=jobs)
     with replacing_folder(out, "--out", "report") as staging:
         build_report(inputs, staging, progress=True)
     print(f"report written: {out / 'index.html'} and {out / 'REPORT.md'} ({len(runs)} runs, "

@@ -204,19 +204,23 @@ class Sweep:
 def sweeps(frame: pd.DataFrame, x_column: str, y_column: str) -> list[Sweep]:
     """The ``Sweep`` of every integrator in ``frame`` (grouped by family, then name) for a chart of
     ``y_column`` against ``x_column``; y is taken as |y|."""
+    status = frame["status"].to_numpy(object)
+    ok, diverged = status == STATUS_OK, status == STATUS_DIVERGED
+    x = frame[x_column].to_numpy(dtype=float)
+    y = np.abs(frame[y_column].to_numpy(dtype=float))
+    plottable = np.isfinite(x) & (x > 0) & np.isfinite(y) & (y > 0)
+    along = -frame["kh"].fillna(frame["tol"]).to_numpy(dtype=float)  # coarse to fine
+    names, tolerance_sweep = frame["integrator"].to_numpy(object), frame["tol"].notna().to_numpy(bool)
     found = []
     for integrator, family in _ordered_integrators(frame):
-        rows = frame[frame["integrator"] == integrator]
-        adaptive = bool(rows["tol"].notna().any())
-        ok = rows[rows["status"] == STATUS_OK]
-        x = ok[x_column].to_numpy(dtype=float)
-        y = np.abs(ok[y_column].to_numpy(dtype=float))
-        plottable = np.isfinite(x) & (x > 0) & np.isfinite(y) & (y > 0)
-        points = ok[plottable].assign(**{y_column: y[plottable]})
-        points = points.assign(_along=-points["kh"].fillna(points["tol"])).sort_values("_along", kind="stable")
-        found.append(Sweep(integrator, family, adaptive, points.drop(columns="_along"), ok[~plottable],
-                           rows[rows["status"] == STATUS_DIVERGED],
-                           rows[~rows["status"].isin((STATUS_OK, STATUS_DIVERGED))]))
+        mine = names == integrator
+        drawn = np.flatnonzero(mine & ok & plottable)
+        drawn = drawn[np.argsort(along[drawn], kind="stable")]
+        found.append(Sweep(integrator, family, bool(tolerance_sweep[mine].any()),
+                           frame.iloc[drawn].assign(**{y_column: y[drawn]}),
+                           frame.iloc[np.flatnonzero(mine & ok & ~plottable)],
+                           frame.iloc[np.flatnonzero(mine & diverged)],
+                           frame.iloc[np.flatnonzero(mine & ~ok & ~diverged)]))
     return found
 
 

@@ -51,12 +51,16 @@ class Paragraph:
 class Figure:
     """An image pair ``<stem>.png`` / ``<stem>.svg`` (stem relative to the document's folder), and optionally
     the same chart as a plotly figure (``interactive``: its JSON; ``points``: how many markers it draws), which
-    the HTML rendering shows instead of the PNG (with links to the PNG and SVG)."""
+    the HTML rendering shows instead of the PNG (with links to the PNG and SVG). ``static`` false: no PNG or SVG
+    was written (a report built without ``--static``); REPORT.md then points to the chart in index.html."""
 
     stem: str
     caption: str
     interactive: str | None = None
     points: int = 0
+    static: bool = True
+    beside: bool = False
+    """Drawn to the right of the table just before it in the HTML page (the recommendations)."""
 
 
 @dataclass
@@ -244,10 +248,14 @@ def render_markdown(title: str, blocks: list[Block]) -> str:
             lines += ["#" * block.level + " " + markdown_text(block.text), ""]
         elif isinstance(block, Paragraph):
             lines += [_inline_markdown(block.text), ""]
-        elif isinstance(block, Figure):
+        elif isinstance(block, Figure) and block.static:
             caption = _inline_markdown(block.caption)
             lines += [f"![{caption}]({_url(block.stem + '.png')})", "",
                       f"*{caption}* ([SVG]({_url(block.stem + '.svg')}))", ""]
+        elif isinstance(block, Figure):
+            lines += [f"*{_inline_markdown(block.caption)}* (interactive chart in "
+                      f"[index.html](index.html#{_figure_anchor(block)}); static PNG and SVG: "
+                      "`foucault-bench report --static`)", ""]
         elif isinstance(block, Table):
             links = ", ".join(f"[{kind}]({_url(path)})" for kind, path in _table_links(block.stem))
             table = markdown_table(block.display)
@@ -274,8 +282,11 @@ table.data .text { text-align: left; max-width: 32em; overflow-wrap: break-word;
 details.long-table > summary { cursor: pointer; }
 details.long-table input { margin: 0.5em 0.5em 0.5em 0; }
 .notes { font-size: 0.85em; color: #444; }
-nav ul { columns: 2; font-size: 0.92em; }
+nav ul { columns: 4; font-size: 0.85em; margin: 0.3em 0; }
 div.chart { width: 100%; min-height: 520px; border: 1px solid #ddd; }
+.side-by-side { display: flex; gap: 1em; align-items: flex-start; }
+.side-table { flex: 0 0 34%; overflow-x: auto; } .side-chart { flex: 1 1 0; min-width: 0; }
+.side-chart figure { margin-top: 0; }
 """
 
 
@@ -312,17 +323,42 @@ def _anchors(blocks: list[Block]) -> dict[int, str]:
     return anchors
 
 
+def _figure_anchor(block: Figure) -> str:
+    """The id of a chart's figure element in index.html: its file stem's name (unique per report)."""
+    return "figure-" + block.stem.rsplit("/", 1)[-1]
+
+
 def _interactive_html(block: Figure, number: int) -> str:
     """A plotly chart: its div (``data-points``: the markers it should draw) and the script drawing it."""
     chart_id = f"chart-{number}"
+    static = (f" (static: <a href='{_attribute(_url(block.stem + '.png'))}'>PNG</a>, "
+              f"<a href='{_attribute(_url(block.stem + '.svg'))}'>SVG</a>)") if block.static else ""
     figure_json = cast(str, block.interactive).replace("<", "\\u003c")  # JSON strings only: no </script> or <!-- ends it
-    return (f"<figure><div class='chart' id='{chart_id}' data-points='{int(block.points)}'></div><script>"
+    return (f"<figure id='{_attribute(_figure_anchor(block))}' data-stem='{_attribute(block.stem)}'>"
+            f"<div class='chart' id='{chart_id}' "
+            f"data-points='{int(block.points)}'></div><script>"
             f"(function () {{ var figure = {figure_json}; "
             f"Plotly.newPlot('{chart_id}', figure.data, figure.layout, {{responsive: true, displaylogo: false}})"
             f".then(function (chart) {{ chart.on('plotly_legendclick', function (event) "
             f"{{ return foucaultLegendClick(chart, event); }}); }}); }})();</script>"
-            f"<figcaption>{_inline_html(block.caption)} (static: <a href='{_attribute(_url(block.stem + '.png'))}'>"
-            f"PNG</a>, <a href='{_attribute(_url(block.stem + '.svg'))}'>SVG</a>)</figcaption></figure>")
+            f"<figcaption>{_inline_html(block.caption)}{static}</figcaption></figure>")
+
+
+def _table_html(block: Table) -> list[str]:
+    """A table with its file links, folded when collapsible, and its column notes."""
+    links = ", ".join(f"<a href='{_attribute(_url(path))}'>{kind}</a>" for kind, path in _table_links(block.stem))
+    parts = [f"<p><strong>{html.escape(block.title)}</strong> ({links})</p>"]
+    table = f"<div class='table-wrap'>{html_table(block.display)}</div>"
+    if block.collapsible:
+        table = (f"<details class='long-table'><summary>show the {len(block.display)} rows</summary>"
+                 "<input type='search' placeholder='filter rows: words, all must match' "
+                 "oninput='filterRows(this)'><span class='count'></span>" + table + "</details>")
+    parts.append(table)
+    if block.column_notes:
+        notes = "; ".join(f"<code>{html.escape(name)}</code>: {_inline_html(note)}"
+                          for name, note in block.column_notes.items())
+        parts.append(f"<p class='notes'>Columns: {notes}</p>")
+    return parts
 
 
 def render_html(title: str, blocks: list[Block]) -> str:
@@ -341,31 +377,27 @@ def render_html(title: str, blocks: list[Block]) -> str:
              f"<nav><ul>{toc}</ul></nav>"]
     charts = 0
     for index, block in enumerate(blocks):
+        rendered: list[str] = []
         if isinstance(block, Heading):
-            parts.append(f"<h{block.level} id='{_attribute(anchors[index])}'>{html.escape(block.text)}"
-                         f"</h{block.level}>")
+            rendered.append(f"<h{block.level} id='{_attribute(anchors[index])}'>{html.escape(block.text)}"
+                            f"</h{block.level}>")
         elif isinstance(block, Paragraph):
-            parts.append(f"<p>{_inline_html(block.text)}</p>")
+            rendered.append(f"<p>{_inline_html(block.text)}</p>")
         elif isinstance(block, Figure) and block.interactive:
             charts += 1
-            parts.append(_interactive_html(block, charts))
+            rendered.append(_interactive_html(block, charts))
         elif isinstance(block, Figure):
             svg, png = _attribute(_url(block.stem + ".svg")), _attribute(_url(block.stem + ".png"))
-            parts.append(f"<figure><a href='{svg}'><img src='{png}' alt='{_attribute(block.caption)}'></a>"
-                         f"<figcaption>{_inline_html(block.caption)} (<a href='{svg}'>SVG</a>)</figcaption></figure>")
+            rendered.append(f"<figure><a href='{svg}'><img src='{png}' alt='{_attribute(block.caption)}'></a>"
+                            f"<figcaption>{_inline_html(block.caption)} (<a href='{svg}'>SVG</a>)</figcaption>"
+                            "</figure>")
         elif isinstance(block, Table):
-            links = ", ".join(f"<a href='{_attribute(_url(path))}'>{kind}</a>" for kind, path in _table_links(block.stem))
-            parts.append(f"<p><strong>{html.escape(block.title)}</strong> ({links})</p>")
-            table = f"<div class='table-wrap'>{html_table(block.display)}</div>"
-            if block.collapsible:
-                table = (f"<details class='long-table'><summary>show the {len(block.display)} rows</summary>"
-                         "<input type='search' placeholder='filter rows: words, all must match' "
-                         "oninput='filterRows(this)'><span class='count'></span>" + table + "</details>")
-            parts.append(table)
-            if block.column_notes:
-                notes = "; ".join(f"<code>{html.escape(name)}</code>: {_inline_html(note)}"
-                                  for name, note in block.column_notes.items())
-                parts.append(f"<p class='notes'>Columns: {notes}</p>")
+            rendered += _table_html(block)
+        if isinstance(block, Figure) and block.beside and index and isinstance(blocks[index - 1], Table):
+            table_parts = parts.pop()
+            rendered = [f"<div class='side-by-side'><div class='side-table'>{table_parts}</div>"
+                        f"<div class='side-chart'>{''.join(rendered)}</div></div>"]
+        parts.append("\n".join(rendered))
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"
 

@@ -67,7 +67,8 @@ def _text(value: object) -> str:
 def _hover(rows: pd.DataFrame, error_column: str) -> list[list[str]]:
     """customdata rows (``HOVER_FIELDS``) of results rows."""
     data = []
-    for row in rows.to_dict("records"):
+    needed = [column for column in dict.fromkeys((*HOVER_FIELDS, "kh", "tol", error_column)) if column in rows]
+    for row in rows[needed].to_dict("records"):  # only the shown columns: a whole results row is slow to convert
         values = {**row, "setting": setting_label(row.get("kh"), row.get("tol")),
                   "error": abs(row[error_column]) if row.get(error_column) is not None else math.nan}
         data.append([_text(values.get(field, math.nan)) for field in HOVER_FIELDS])
@@ -99,6 +100,7 @@ def add_sweeps(figure: go.Figure, frame: pd.DataFrame, x_column: str, y_column: 
     (``_left``)."""
     families_seen: set[str] = set()
     left, left_slots = _left(frame, x_column), {"not ok": 0, "no value": 0}
+    bottom = _bottom(frame, y_column)
     for sweep in charts.sweeps(frame, x_column, y_column):
         style = charts.integrator_style(sweep.integrator, sweep.family, sweep.adaptive)
         if legend and sweep.family not in families_seen:
@@ -120,7 +122,7 @@ def add_sweeps(figure: go.Figure, frame: pd.DataFrame, x_column: str, y_column: 
         if top is None:
             continue
         for edge_rows, edge_y, name in ((pd.concat([sweep.diverged, sweep.failed]), top, "not ok"),
-                                        (sweep.no_value, _bottom(frame, y_column), "no value")):
+                                        (sweep.no_value, bottom, "no value")):
             if edge_rows.empty:
                 continue
             x = edge_rows[x_column].to_numpy(dtype=float, copy=True)
@@ -153,14 +155,14 @@ EDGE_SYMBOLS = {STATUS_DIVERGED: "triangle-up", STATUS_FAILED: "x", STATUS_TIMEO
 
 def _bottom(frame: pd.DataFrame, column: str) -> float:
     """A y below every plotted value (÷10 the smallest), where ok runs without a plottable value are drawn."""
-    values = np.abs(frame.loc[frame["status"] == STATUS_OK, column].to_numpy(float))
+    values = np.abs(frame[column].to_numpy(float)[(frame["status"] == STATUS_OK).to_numpy(bool)])
     values = values[np.isfinite(values) & (values > 0)]
     return float(values.min() / 10.0) if values.size else 0.1
 
 
 def _top(frame: pd.DataFrame, column: str) -> float | None:
     """A y above every plotted value (×10 the largest), where not-ok runs are drawn."""
-    values = np.abs(frame.loc[frame["status"] == STATUS_OK, column].to_numpy(float))
+    values = np.abs(frame[column].to_numpy(float)[(frame["status"] == STATUS_OK).to_numpy(bool)])
     values = values[np.isfinite(values) & (values > 0)]
     return float(values.max() * 10.0) if values.size else 1.0
 

@@ -22,6 +22,7 @@ matplotlib.rcParams["svg.hashsalt"] = "fixed"  # with SOURCE_DATE_EPOCH: the sam
 import foucault_bench.reports.build as build
 build.seed_blocks = lambda folder, prefix: []  # the seed section is tested in test_seed.py
 build._work_precision = lambda builder, runs: None  # one figure (convergence) is enough to test the writing
+build._recommendations = lambda builder, runs, targets: None  # (its charts are work-precision charts)
 {extra}
 from foucault_bench.bench.cli import main
 sys.exit(main(["report", *sys.argv[1:]]))

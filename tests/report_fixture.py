@@ -208,7 +208,8 @@ def build_fixture_database(path: Path) -> Path:
 
 def build_fixture_report(database: Path, folder: Path) -> Path:
     """The report of the fixture database in ``folder`` (``reports.build.build_report``; no studies, no seed
-    section); returns ``folder``."""
+    section; static files too, which the chart oracles compare; figures drawn by two worker processes);
+    returns ``folder``."""
     from foucault_bench.bench.run.store import ResultsStore
     from foucault_bench.reports.build import ReportInputs, build_report
 
@@ -218,7 +219,7 @@ def build_fixture_report(database: Path, folder: Path) -> Path:
         runs = store.frame()
         adequacy = store.adequacy()
     build_report(ReportInputs(runs=runs, adequacy=adequacy, provenance={"database": database.name},
-                              include_seed=False), folder)
+                              include_seed=False, jobs=2), folder)
     return folder
 
 

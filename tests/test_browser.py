@@ -103,7 +103,7 @@ def test_every_chart_draws_its_points_lines_and_legend(report_dom: tuple[Path, s
     counter = ChartCounter()
     counter.feed(dom)
     html = (folder / "index.html").read_text(encoding="utf-8")
-    assert len(counter.charts) == html.count("class='chart'") == html.count("<figure>")  # every chart interactive
+    assert len(counter.charts) == html.count("class='chart'") == html.count("<figure")  # every chart interactive
     for chart in counter.charts:
         assert chart["points"] == chart["expected"], chart
         assert chart["points"] + chart["lines"] > 0, chart
@@ -206,3 +206,44 @@ def test_each_trace_draws_one_marker_per_finite_point(browser_charts) -> None:
             assert drawn == int(keep.sum()), (entry["id"], trace.get("name"), drawn, int(keep.sum()))
             checked += drawn
     assert checked > 0
+
+
+FIRST_SCREEN_PROBE = """<script>
+window.addEventListener('load', function () { setTimeout(function () {
+  function box(element) {
+    if (!element) { return null; }
+    var rect = element.getBoundingClientRect();
+    return {top: rect.top, bottom: rect.bottom, left: rect.left, right: rect.right};
+  }
+  var probe = document.createElement('pre');
+  probe.id = 'first-screen';
+  probe.textContent = JSON.stringify({
+    width: window.innerWidth, height: window.innerHeight,
+    table: box(document.querySelector('.side-by-side .side-table table')),
+    chart: box(document.querySelector('.side-by-side .side-chart div.chart')),
+    drawn: document.querySelectorAll('.side-by-side .side-chart div.chart path.point').length > 0});
+  document.body.appendChild(probe);
+}, 0); });
+</script>"""
+"""Appended to a copy of index.html: the viewport's size and where the first recommendation table and the
+chart beside it are, once the page is drawn and before any scroll."""
+
+
+def test_the_first_screen_shows_a_recommendation_and_its_chart(fixture_report: Path, tmp_path: Path) -> None:
+    """At 1400×900 the first recommendation table and its work-precision chart lie wholly in the viewport."""
+    page = fixture_report / "index_first_screen.html"
+    page.write_text((fixture_report / "index.html").read_text(encoding="utf-8")
+                    .replace("</body>", FIRST_SCREEN_PROBE + "</body>"), encoding="utf-8")
+    done = subprocess.run([BROWSER, *BROWSER_FLAGS, "--window-size=1400,900", f"--user-data-dir={tmp_path}",
+                           page.as_uri()], capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
+    assert done.returncode == 0 and done.stdout, done.stderr[-2000:]
+    probe = re.search(r"<pre id=\"first-screen\">(.*?)</pre>", done.stdout, re.S)
+    assert probe is not None, done.stdout[-2000:]
+    screen = json.loads(probe.group(1).replace("&lt;", "<").replace("&gt;", ">").replace("&amp;", "&"))
+    assert (screen["width"], screen["height"]) == (1400, 900), screen
+    for name in ("table", "chart"):
+        rect = screen[name]
+        assert rect is not None, (name, screen)
+        assert 0 <= rect["top"] < rect["bottom"] <= screen["height"], (name, screen)
+        assert 0 <= rect["left"] < rect["right"] <= screen["width"], (name, screen)
+    assert screen["drawn"], screen  # the chart has drawn its markers, not only its frame

@@ -72,8 +72,9 @@ def place(tmp_path_factory):
     patch = pytest.MonkeyPatch()
     patch.setattr(build, "seed_blocks", lambda folder, prefix: [])
     patch.setattr(build, "_work_precision", lambda builder, runs: None)
+    patch.setattr(build, "_recommendations", lambda builder, runs, targets: None)
     try:
-        assert cli_main(["report", "--db", str(database), "--out", str(old), "--studies", "skip",
+        assert cli_main(["report", "--db", str(database), "--out", str(old), "--studies", "skip", "--static",
                          "--targets", "1e-3"]) == 0
     finally:
         patch.undo()
@@ -88,8 +89,8 @@ def old_report_at(place, name: str) -> Path:
 
 
 def new_report(place, out: Path, extra: str = "") -> subprocess.CompletedProcess:
-    command = quick_report_command("--db", place["database"], "--out", out, "--studies", "skip", *NEW_TARGETS,
-                                   extra=extra)
+    command = quick_report_command("--db", place["database"], "--out", out, "--studies", "skip", "--static",
+                                   *NEW_TARGETS, extra=extra)
     return subprocess.run(command, capture_output=True, text=True, env=QUICK_ENVIRONMENT, timeout=600)
 
 
@@ -147,7 +148,8 @@ def _staging_holds(parent: Path, predicate) -> bool:
 @pytest.mark.parametrize("point", ["tables", "figures"])
 def test_a_kill_from_outside_while_building_leaves_the_old_report(killed_in_the_window, place, point):
     out = old_report_at(place, f"outside-{point}")
-    command = quick_report_command("--db", place["database"], "--out", out, "--studies", "skip", *NEW_TARGETS)
+    command = quick_report_command("--db", place["database"], "--out", out, "--studies", "skip", "--static",
+                                   *NEW_TARGETS)
     predicate = {"tables": lambda staging: len(list((staging / "tables").glob("*"))) >= 8,
                  "figures": lambda staging: any((staging / "figures").glob("*.png"))}[point]
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=QUICK_ENVIRONMENT)

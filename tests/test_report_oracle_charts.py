@@ -70,12 +70,11 @@ def page_charts(folder: Path) -> dict[str, Chart]:
     """Every chart of index.html by its static file's stem (``figures/NAME``)."""
     html = (folder / "index.html").read_text(encoding="utf-8")
     found = {}
-    for block in re.findall(r"<figure>(.*?)</figure>", html, re.S):
+    for stem, block in re.findall(r"<figure(?: id='[^']+' data-stem='([^']+)')?>(.*?)</figure>", html, re.S):
         data = re.search(r"var figure = (.*?); Plotly\.newPlot", block, re.S)
-        stem = re.search(r"href='(figures/[^']+)\.png'", block).group(1)
-        caption = re.search(r"<figcaption>(.*?) \(static:", block, re.S).group(1)
         chart_id = re.search(r"<div class='chart' id='([^']+)'", block)
-        assert data is not None and chart_id is not None, f"{stem}: not interactive"
+        assert stem and data is not None and chart_id is not None, f"{block[:200]}: not interactive"
+        caption = re.search(r"<figcaption>(.*?)(?: \(static:.*)?</figcaption>", block, re.S).group(1)
         found[stem] = Chart(stem, caption, json.loads(data.group(1)), chart_id.group(1))
     return found
 

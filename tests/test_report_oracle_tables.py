@@ -43,7 +43,7 @@ PLUGIN_INTEGRATOR = "plug_in_solver"
 PROVENANCE = "made | elsewhere <x> & `y` **z**"
 
 SAFE_ATTRIBUTES = {"lang", "charset", "id", "class", "href", "src", "alt", "type", "placeholder", "data-points",
-                   "oninput"}
+                   "data-stem", "oninput"}
 """Every attribute the report's own markup writes (``oninput`` only on the filter box of a folded table)."""
 SAFE_ELEMENTS = {"html", "head", "meta", "title", "style", "script", "body", "h1", "h2", "h3", "nav", "ul", "li",
                  "a", "p", "strong", "em", "code", "figure", "img", "figcaption", "div", "table", "thead",

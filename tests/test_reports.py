@@ -245,9 +245,21 @@ def test_report_command_reads_the_results_database(tmp_path: Path, monkeypatch) 
     assert cli_main(["report", "--db", str(database), "--out", str(out), "--studies", "skip"]) == 0
     markdown = (out / "REPORT.md").read_text(encoding="utf-8")
     assert matrix_id in markdown and "no ok run (failed)" in markdown
-    assert (out / "figures" / "model_adequacy.png").is_file()
     compact = pd.read_csv(out / "tables" / "runs_compact.csv")
     assert len(compact) == len(runs) and set(compact["integrator"]) == {"rk4", "scipy_lsoda"}
+    # without --static: no static files, and REPORT.md links each chart to its figure in index.html
+    assert not list(out.glob("figures/*"))
+    html = (out / "index.html").read_text(encoding="utf-8")
+    linked = re.findall(r"\(interactive chart in \[index\.html\]\(index\.html#([^)]+)\)", markdown)
+    figure_ids = re.findall(r"<figure id='([^']+)'><div class='chart'", html)
+    assert linked == figure_ids and "figure-model_adequacy" in linked
+    assert "(static:" not in html
+    assert cli_main(["report", "--db", str(database), "--out", str(out), "--studies", "skip", "--static",
+                     "--jobs", "1"]) == 0
+    static = (out / "REPORT.md").read_text(encoding="utf-8")
+    shown = re.findall(r"!\[[^]]*\]\((figures/[^)]+)\.png\)", static)
+    assert [f"figure-{stem.split('/')[-1]}" for stem in shown] == figure_ids
+    assert all((out / f"{stem}.png").is_file() and (out / f"{stem}.svg").is_file() for stem in shown)
 
 
 def test_report_command_without_a_database_is_a_clear_error(tmp_path: Path, capsys) -> None:

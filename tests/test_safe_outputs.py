@@ -281,6 +281,7 @@ def _quick_sections(monkeypatch) -> None:
     monkeypatch.setattr(build, "seed_blocks", lambda folder, prefix: [])
     monkeypatch.setattr(build, "_work_precision", lambda builder, runs: None)
     monkeypatch.setattr(build, "_convergence", lambda builder, runs: None)
+    monkeypatch.setattr(build, "_recommendations", lambda builder, runs, targets: None)
 
 
 def test_an_earlier_report_is_replaced_whole_and_a_user_folder_only_with_force(database, tmp_path, monkeypatch,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 from pathlib import Path
 
 from foucault_bench.bench.run.store import DEFAULT_DB  # the store module imports no numerical library
@@ -28,6 +29,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--targets", type=float, nargs="+", default=list(DEFAULT_TARGETS), metavar="ERROR",
                         help="target reference errors of the matched-accuracy summary (default: "
                              f"{' '.join(f'{t:g}' for t in DEFAULT_TARGETS)})")
+    parser.add_argument("--static", action="store_true",
+                        help="also write every chart as PNG and SVG under figures/ (for papers; REPORT.md then "
+                             "shows them); without it the charts are interactive in index.html only")
+    parser.add_argument("--jobs", type=int, default=None,
+                        help="worker processes drawing the figures (default: the number of CPUs)")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -36,9 +42,12 @@ def main(args: argparse.Namespace) -> int:
 
     problems = [f"--targets: a target error must be a finite number > 0, got {target:g}"
                 for target in args.targets if not (math.isfinite(target) and target > 0)]
+    if args.jobs is not None and args.jobs < 1:
+        problems.append(f"--jobs: the number of worker processes must be ≥ 1, got {args.jobs}")
     if problems:
         raise InputError(problems)
     output_folder(args.out, "--out", force=args.force, inputs={"--db": args.db})
     from foucault_bench.reports.build import write_report
 
-    return write_report(args.db, args.matrix_id, args.out, args.studies, tuple(args.targets))
+    return write_report(args.db, args.matrix_id, args.out, args.studies, tuple(args.targets), static=args.static,
+                        jobs=args.jobs or os.cpu_count() or 1)
