@@ -34,6 +34,8 @@ from typing import TYPE_CHECKING, Callable, Iterator
 import pandas as pd
 from foucault_bench.bench.atomic import replacing_folder
 from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.history.load import load_history
+from foucault_bench.bench.history.revisions import group_revisions
 from foucault_bench.bench.problems.scene_key import scene_labels
 from foucault_bench.bench.problems.scenes import SCENES
 from foucault_bench.bench.run.store import ResultsStore
@@ -58,6 +60,7 @@ from foucault_bench.reports.document import (
     write_document,
     write_table_files,
 )
+from foucault_bench.reports.history_page import write_history
 from foucault_bench.reports.seed import seed_blocks
 from foucault_bench.bench.studies import STUDIES, ensure_studies
 from matplotlib.figure import Figure as MplFigure
@@ -86,6 +89,8 @@ class ReportInputs:
         static: write every chart's PNG and SVG under figures/ (else only those of the charts that are not
             interactive, and of the seed section); REPORT.md shows the static files or links to index.html.
         jobs: worker processes drawing the figures (1: in this process).
+        revisions: code revisions whose runs the database holds (``bench.history``); with more than one, the
+            report links its history page (``history/history.html``, ``reports.history_page``).
     """
 
     runs: pd.DataFrame
@@ -97,6 +102,7 @@ class ReportInputs:
     interactive: bool = True
     static: bool = True
     jobs: int = 1
+    revisions: int = 1
 
 
 def file_stem(name: str) -> str:
@@ -260,17 +266,22 @@ def _overview(builder: _Builder, inputs: ReportInputs) -> None:
         f"{len(runs)} runs: {', '.join(f'{int(counts.get(status, 0))} {status}' for status in tables.STATUSES)}. "
         f"Scenes: {literal(', '.join(sorted(runs['scene'].unique())))}. "
         f"Integrators: {literal(', '.join(sorted(runs['integrator'].unique())))}."))
+    if inputs.revisions > 1:
+        builder.add(Paragraph(
+            f"The database holds runs of {inputs.revisions} code revisions: the history page shows every verdict and "
+            "the CPU time of each run by revision, and the changes between consecutive revisions (`foucault-bench "
+            "history`):", link=("history", "history/history.html")))
     builder.add(Paragraph(
         "How to read the charts: colour = integrator family (the same in every chart), marker and line pattern = "
         "integrator within its family, solid-type lines = fixed-step sweeps (k·h), dashed-type lines = tolerance "
-        f"sweeps. Cost is {_cost_words(runs)}; the bars across a point span the spread (max − min) of the "
-        "timed repeats. The thick grey staircase is the Pareto front: the runs no other run beats on both cost "
+        f"sweeps. Cost is {_cost_words(runs)}; the bars across a point span the 95 % confidence interval of the median CPU "
+        "time (runs with too few timed repeats for one have no bar). The thick grey staircase is the Pareto front: the runs no other run beats on both cost "
         "and error. Runs that diverged (▲) or failed (✕) are drawn above the data at their cost, or at the left "
         "edge when the cost is unknown (static charts: on the top edge); an ok run without a finite positive value "
         "is drawn below the data (▽; static charts: on the bottom edge). In this page, hovering a point shows its "
         "run (integrator, family, setting, error, CPU and wall time, evaluations, steps, status), clicking a legend "
         "entry hides that integrator and clicking 'all <family>' hides the family (double click: show only "
-        "that entry); the static PNG and SVG files for papers are linked under each chart. "
+        "that entry); with `--static` the PNG and SVG files for papers are linked under each chart. "
         "Errors are dimensionless: positions relative to the amplitude A, energies relative to the swing's "
         "energy, precession rates relative to Ω_E|sin φ|. Frame x South, y East, z Up; latitude φ north "
         "positive; rates counter-clockwise about up positive (the textbook rate is −Ω_E sin φ)."))
@@ -679,11 +690,15 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
         if not adequacy.empty:
             adequacy = adequacy.assign(scene=scene_labels(adequacy, runs))
         study_tables = {} if studies == "skip" else _study_tables(store, db, recompute=studies == "recompute")
+        revisions = len(group_revisions(store.matrix_runs(), source=str(db)))
         inputs = ReportInputs(runs=runs, studies=study_tables, adequacy=adequacy,
                               provenance={"database": str(db), **_provenance(store, matrix_id)},
-                              targets=targets, static=static, jobs=jobs)
+                              targets=targets, static=static, jobs=jobs, revisions=revisions)
     with replacing_folder(out, "--out", "report") as staging:
         build_report(inputs, staging, progress=True)
+        if revisions > 1:
+            (staging / "history").mkdir()
+            write_history(load_history(db, repository=Path.cwd()), staging / "history")
     print(f"report written: {out / 'index.html'} and {out / 'REPORT.md'} ({len(runs)} runs, "
           f"{', '.join(STUDIES) if study_tables else 'no studies'}; {time.perf_counter() - started:.1f} s)")
     return 0

@@ -42,9 +42,11 @@ class Heading:
 
 @dataclass
 class Paragraph:
-    """Plain text; `backticks` become code, **double stars** bold, in both renderings."""
+    """Plain text; `backticks` become code, **double stars** bold, in both renderings; ``link`` (text, a path
+    relative to the report folder) is appended as a link."""
 
     text: str
+    link: tuple[str, str] | None = None
 
 
 @dataclass
@@ -247,7 +249,8 @@ def render_markdown(title: str, blocks: list[Block]) -> str:
         if isinstance(block, Heading):
             lines += ["#" * block.level + " " + markdown_text(block.text), ""]
         elif isinstance(block, Paragraph):
-            lines += [_inline_markdown(block.text), ""]
+            link = f" [{block.link[0]}]({_url(block.link[1])})" if block.link else ""
+            lines += [_inline_markdown(block.text) + link, ""]
         elif isinstance(block, Figure) and block.static:
             caption = _inline_markdown(block.caption)
             lines += [f"![{caption}]({_url(block.stem + '.png')})", "",
@@ -382,7 +385,9 @@ def render_html(title: str, blocks: list[Block]) -> str:
             rendered.append(f"<h{block.level} id='{_attribute(anchors[index])}'>{html.escape(block.text)}"
                             f"</h{block.level}>")
         elif isinstance(block, Paragraph):
-            rendered.append(f"<p>{_inline_html(block.text)}</p>")
+            link = (f" <a href='{_attribute(_url(block.link[1]))}'>{html.escape(block.link[0])}</a>"
+                    if block.link else "")
+            rendered.append(f"<p>{_inline_html(block.text)}{link}</p>")
         elif isinstance(block, Figure) and block.interactive:
             charts += 1
             rendered.append(_interactive_html(block, charts))

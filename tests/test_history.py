@@ -282,3 +282,26 @@ def test_bisect_refuses_an_unknown_revision(tmp_path, capsys):
                          "--integrator", "rk4", "--kh", "0.1", "--verdict", "reference_error"])
     error = capsys.readouterr().err.strip().splitlines()
     assert status == 2 and len(error) == 1 and "--good nosuch: not a commit" in error[0]
+
+
+def test_a_report_of_a_database_of_several_revisions_links_its_history_page(history_db, tmp_path, monkeypatch):
+    """The report's overview links history/history.html when the database holds more than one revision, and the
+    page written there is the history of the database (the figure drawing is replaced: it is tested elsewhere)."""
+    import foucault_bench.reports.build as build
+
+    seen = {}
+
+    def overview_only(inputs, folder, progress=False):
+        seen["revisions"] = inputs.revisions
+        builder = build._Builder(folder, False, False)
+        build._overview(builder, inputs)
+        return build.write_document(folder, "test", builder.blocks)
+
+    monkeypatch.setattr(build, "build_report", overview_only)
+    out = tmp_path / "report"
+    assert build.write_report(history_db["db"], None, out, studies="skip") == 0
+    assert seen["revisions"] == len(COMMITS)
+    assert "href='history/history.html'" in (out / "index.html").read_text(encoding="utf-8")
+    assert "(history/history.html)" in (out / "REPORT.md").read_text(encoding="utf-8")
+    page = (out / "history" / "history.html").read_text(encoding="utf-8")
+    assert f"{len(COMMITS)} revisions" in page and "2 change(s)" in page
