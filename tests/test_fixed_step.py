@@ -20,8 +20,6 @@ from foucault_bench.integrators import REGISTRY, Problem, built_in_names, get_in
 from foucault_bench.models import MODELS, PendulumParameters
 
 FIXED_STEP = [name for name in built_in_names() if not REGISTRY[name].adaptive]
-WITH_ORDER = [name for name in FIXED_STEP if REGISTRY[name].order is not None]
-WITH_LIMIT = [name for name in built_in_names() if REGISTRY[name].stability_limit_kh is not None]
 PARIS = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
 EQUATOR = PendulumParameters(length_m=67.0, latitude_deg=0.0, amplitude_m=3.0)
 
