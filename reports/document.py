@@ -272,8 +272,9 @@ def render_markdown(title: str, blocks: list[Block]) -> str:
 
 
 _STYLE = """
-body { font-family: system-ui, sans-serif; max-width: 1250px; margin: 1.5em auto; padding: 0 1em; color: #222; }
-h1 { border-bottom: 2px solid #444; } h2 { border-bottom: 1px solid #bbb; margin-top: 2em; }
+body { font-family: system-ui, sans-serif; max-width: 1360px; margin: 1.5em auto; padding: 0 1em; color: #222; }
+h1 { border-bottom: 2px solid #444; margin: 0.3em 0; } h2 { border-bottom: 1px solid #bbb; margin-top: 2em; }
+h2:first-of-type { margin-top: 0.6em; }
 figure { margin: 1.2em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
 figcaption { font-size: 0.92em; color: #444; }
 .table-wrap { overflow-x: auto; margin: 0.6em 0 1.2em 0; }
@@ -285,11 +286,14 @@ table.data .text { text-align: left; max-width: 32em; overflow-wrap: break-word;
 details.long-table > summary { cursor: pointer; }
 details.long-table input { margin: 0.5em 0.5em 0.5em 0; }
 .notes { font-size: 0.85em; color: #444; }
-nav ul { columns: 4; font-size: 0.85em; margin: 0.3em 0; }
+nav ul { display: flex; flex-wrap: wrap; gap: 0.2em 1.2em; list-style: none; padding: 0; font-size: 0.85em;
+  margin: 0.3em 0; }
 div.chart { width: 100%; min-height: 520px; border: 1px solid #ddd; }
-.side-by-side { display: flex; gap: 1em; align-items: flex-start; }
-.side-table { flex: 0 0 34%; overflow-x: auto; } .side-chart { flex: 1 1 0; min-width: 0; }
-.side-chart figure { margin-top: 0; }
+.side-by-side { display: grid; grid-template-columns: fit-content(50%) minmax(0, 1fr); gap: 1em; align-items: start; }
+.side-table { min-width: 0; overflow-x: auto; } .side-table p { margin: 0 0 0.4em 0; font-size: 0.9em; }
+.side-table .table-wrap { margin: 0; } .side-table table.data { font-size: 0.78em; }
+.side-table table.data th, .side-table table.data td { padding: 1px 4px; }
+.side-chart figure { margin: 0; } .side-chart div.chart { min-height: 0; }
 """
 
 
@@ -331,16 +335,22 @@ def _figure_anchor(block: Figure) -> str:
     return "figure-" + block.stem.rsplit("/", 1)[-1]
 
 
+BESIDE_CHART_HEIGHT_PX = 440
+"""The height of a chart drawn beside a table: with the table above the fold at 1400×900 (the first screen)."""
+
+
 def _interactive_html(block: Figure, number: int) -> str:
-    """A plotly chart: its div (``data-points``: the markers it should draw) and the script drawing it."""
+    """A plotly chart: its div (``data-points``: the markers it should draw) and the script drawing it (a chart
+    beside a table ``BESIDE_CHART_HEIGHT_PX`` high)."""
     chart_id = f"chart-{number}"
+    height = f"figure.layout.height = {BESIDE_CHART_HEIGHT_PX}; " if block.beside else ""
     static = (f" (static: <a href='{_attribute(_url(block.stem + '.png'))}'>PNG</a>, "
               f"<a href='{_attribute(_url(block.stem + '.svg'))}'>SVG</a>)") if block.static else ""
     figure_json = cast(str, block.interactive).replace("<", "\\u003c")  # JSON strings only: no </script> or <!-- ends it
     return (f"<figure id='{_attribute(_figure_anchor(block))}' data-stem='{_attribute(block.stem)}'>"
             f"<div class='chart' id='{chart_id}' "
             f"data-points='{int(block.points)}'></div><script>"
-            f"(function () {{ var figure = {figure_json}; "
+            f"(function () {{ var figure = {figure_json}; {height}"
             f"Plotly.newPlot('{chart_id}', figure.data, figure.layout, {{responsive: true, displaylogo: false}})"
             f".then(function (chart) {{ chart.on('plotly_legendclick', function (event) "
             f"{{ return foucaultLegendClick(chart, event); }}); }}); }})();</script>"

@@ -14,6 +14,7 @@ every other point when their cost is unknown (a run that stopped before it was t
 from __future__ import annotations
 
 import math
+import textwrap
 from typing import Any
 
 import numpy as np
@@ -167,6 +168,15 @@ def _top(frame: pd.DataFrame, column: str) -> float | None:
     return float(values.max() * 10.0) if values.size else 1.0
 
 
+AXIS_TITLE_CHARACTERS = 48
+"""The longest line of a work-precision chart's axis title: two panels side by side, drawn beside a table too."""
+
+
+def _wrapped(label: str) -> str:
+    """An axis title broken into lines of at most ``AXIS_TITLE_CHARACTERS`` (plotly breaks at ``<br>`` only)."""
+    return "<br>".join(textwrap.wrap(" ".join(label.split()), AXIS_TITLE_CHARACTERS))
+
+
 def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame) -> go.Figure:
     """``charts.work_precision`` for the page: verdict against time (with the Pareto envelope and the 95 %
     confidence interval of each median CPU time) and against accepted steps."""
@@ -179,7 +189,7 @@ def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame)
     for col, cost in ((1, time_cost), (2, steps)):
         add_sweeps(figure, scene_frame, cost, verdict, col=col, legend=col == 1,
                    x_spread=charts.COST_SPREADS.get(cost), top=top)
-        figure.update_xaxes(type="log", title_text=charts.COST_LABELS[cost], row=1, col=col)
+        figure.update_xaxes(type="log", title_text=_wrapped(charts.COST_LABELS[cost]), automargin=True, row=1, col=col)
     if not front.empty:
         figure.add_trace(go.Scatter(x=front[time_cost], y=front["error"], mode="lines", line_shape="hv",
                                     name="Pareto front", line={"color": "rgba(0,0,0,0.35)", "width": 4},
