@@ -341,17 +341,17 @@ BESIDE_CHART_HEIGHT_PX = 440
 
 def _interactive_html(block: Figure, number: int) -> str:
     """A plotly chart: its div (``data-points``: the markers it should draw) and the script drawing it (a chart
-    beside a table ``BESIDE_CHART_HEIGHT_PX`` high)."""
+    beside a table ``BESIDE_CHART_HEIGHT_PX`` high, in a smaller font)."""
     chart_id = f"chart-{number}"
-    height = f"figure.layout.height = {BESIDE_CHART_HEIGHT_PX}; " if block.beside else ""
+    layout = f"Object.assign(figure.layout, {{height: {BESIDE_CHART_HEIGHT_PX}, font: {{size: 10}}}})" if block.beside else "figure.layout"
     static = (f" (static: <a href='{_attribute(_url(block.stem + '.png'))}'>PNG</a>, "
               f"<a href='{_attribute(_url(block.stem + '.svg'))}'>SVG</a>)") if block.static else ""
     figure_json = cast(str, block.interactive).replace("<", "\\u003c")  # JSON strings only: no </script> or <!-- ends it
     return (f"<figure id='{_attribute(_figure_anchor(block))}' data-stem='{_attribute(block.stem)}'>"
             f"<div class='chart' id='{chart_id}' "
             f"data-points='{int(block.points)}'></div><script>"
-            f"(function () {{ var figure = {figure_json}; {height}"
-            f"Plotly.newPlot('{chart_id}', figure.data, figure.layout, {{responsive: true, displaylogo: false}})"
+            f"(function () {{ var figure = {figure_json}; "
+            f"Plotly.newPlot('{chart_id}', figure.data, {layout}, {{responsive: true, displaylogo: false}})"
             f".then(function (chart) {{ chart.on('plotly_legendclick', function (event) "
             f"{{ return foucaultLegendClick(chart, event); }}); }}); }})();</script>"
             f"<figcaption>{_inline_html(block.caption)}{static}</figcaption></figure>")

@@ -168,7 +168,7 @@ def _top(frame: pd.DataFrame, column: str) -> float | None:
     return float(values.max() * 10.0) if values.size else 1.0
 
 
-AXIS_TITLE_CHARACTERS = 48
+AXIS_TITLE_CHARACTERS = 34
 """The longest line of a work-precision chart's axis title: two panels side by side, drawn beside a table too."""
 
 
