@@ -71,10 +71,11 @@ def test_a_model_written_in_a_test_runs_through_the_machinery() -> None:
     compiled = heyoka.cfunc([rhs for _, rhs in system], vars=[variable for variable, _ in system])
     np.testing.assert_allclose(compiled(state, pars=DAMPED.heyoka_parameters(p)), DAMPED.numba_rhs(0.0, state, p),
                                rtol=1e-14, atol=1e-16)
-    # the integrators keep their declared order on it (Verlet through its non-Hamiltonian remainder path)
-    for name in ("rk4", "verlet"):
-        measured = measure_order(get_integrator(name), DAMPED)
-        assert abs(measured.order - get_integrator(name).order) <= ORDER_TOLERANCE, (name, measured)
+    # the order measurement runs on it, and RK4 keeps its declared order (every integrator's order on the
+    # built-in non-Hamiltonian models, Verlet through its remainder path, is the conformance test's:
+    # tests/test_selftest.py)
+    measured = measure_order(get_integrator("rk4"), DAMPED)
+    assert abs(measured.order - get_integrator("rk4").order) <= ORDER_TOLERANCE, measured
     # and the physics is the one written: at whole periods the swing energy is E₀ exp(−γt), γ = k/Q, up to
     # terms of relative order (γ/k)² = 1/Q² = 4e-4 (the oscillating part of dE/dt = −γ|v|² averages out over a
     # period; Landau & Lifshitz, Mechanics, §25); measured 6e-5
