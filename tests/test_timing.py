@@ -204,3 +204,19 @@ def test_the_default_protocol_spends_where_precision_needs_it() -> None:
         assert (timing.cpu_ci95_rel is not None) == established
         if costs_s is scatter:
             assert timing.cpu_ci95_rel > default.target_ci95_rel
+
+
+def test_the_median_interval_holds_for_thousands_of_repeats() -> None:
+    """A fast run may repeat thousands of times (a matrix's max_repeats): 2.0**n overflows past n = 1023, so the
+    order statistics come from the binomial distribution; they equal the exact sum of binomial terms (Python's
+    integers divide exactly), computed here for n = 2000."""
+    import math
+
+    from foucault_bench.bench.run.timing import median_ci95
+
+    n = 2000
+    tail, k = 0, 0
+    while 2 * 40 * (tail + math.comb(n, k)) <= 2 * (1 << n):  # P(B <= k) <= 0.025, in exact integers
+        tail += math.comb(n, k)
+        k += 1
+    assert median_ci95([float(value) for value in range(n)]) == (float(k - 1), float(n - k))

@@ -125,7 +125,7 @@ def physical_limit_problems(params: PendulumParameters) -> list[str]:
       whose plane Earth turns slowly: by π Ω sin φ / k per swing. At Ω ≥ k that is up to half a turn or more per
       swing, so there is no swing plane whose turning points the precession measurement could follow
       (``bench.problems.turning_points``), and the terms of relative size (Ω/k)² that the planar models drop
-      (models/README.md "The three models") are of order one. Earth's Ω_E/k is 10⁻⁵-10⁻⁴ for real pendulums.
+      (models/README.md "The models") are of order one. Earth's Ω_E/k is 10⁻⁵-10⁻⁴ for real pendulums.
     * **The bob stays below the pivot's height.** The spherical model's coordinates end there (z = −√(L² − x²
       − y²), ``models.spherical``), a string can go slack above it, and the planar models approximate the
       spherical one. The spherical model conserves its Jacobi integral h = ½|ṙ|² + g z − (c/2)|ω×r|² exactly;

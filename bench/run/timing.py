@@ -125,10 +125,15 @@ def median_ci95(samples: Sequence[float]) -> tuple[float, float] | None:
     n = len(samples)
     if n < CI_MIN_REPEATS:
         return None
+    from scipy.stats import binom
+
     alpha_half = (1.0 - CI_LEVEL) / 2.0
-    lower_tail, k = 0.0, 0  # lower_tail = P(B <= k - 1) for the interval [x_(k), x_(n+1-k)] (1-based)
-    while lower_tail + math.comb(n, k) / 2.0**n <= alpha_half:
-        lower_tail += math.comb(n, k) / 2.0**n
+    # k: the largest with P(B <= k - 1) <= alpha/2, B ~ Binomial(n, 1/2), for the interval [x_(k), x_(n+1-k)]
+    # (1-based); scipy's binomial distribution, so that thousands of repeats of a fast run do not overflow 2**n
+    k = int(binom.ppf(alpha_half, n, 0.5))
+    while k > 0 and binom.cdf(k - 1, n, 0.5) > alpha_half:
+        k -= 1
+    while binom.cdf(k, n, 0.5) <= alpha_half:
         k += 1
     ordered = sorted(samples)
     return ordered[k - 1], ordered[n - k]
