@@ -160,7 +160,7 @@ def test_selftest_checks_the_installed_plug_in(site: Path) -> None:
     assert "skip  stability limit" in result.stdout
 
 
-PROJECT_TESTS = ("tests/test_matrix.py", "tests/test_fixed_step.py", "tests/test_selftest.py",
+PROJECT_TESTS = ("tests/test_matrix.py",
                  "tests/test_adaptive.py::test_declares_its_facts",
                  "tests/test_adaptive.py::test_the_library_drivers_are_discovered", "tests/test_structure.py",
                  "tests/test_timing.py::test_every_built_in_integrator_says_how_its_cost_arises",
@@ -168,7 +168,9 @@ PROJECT_TESTS = ("tests/test_matrix.py", "tests/test_fixed_step.py", "tests/test
                  "tests/test_studies.py::test_stable_below_the_limit_and_blown_up_above_it",
                  "tests/test_studies.py::test_measured_limits_match_the_declared_ones_without_rotation",
                  "tests/test_studies.py::test_rotation_growth_is_measured_beside_its_law")
-"""The project's tests that enumerate the registry or assert what the built-in matrices cover."""
+"""The project's tests that enumerate the registry or assert what the built-in matrices cover (tests/test_selftest.py
+and tests/test_fixed_step.py enumerate it only in their parametrization, whose ids the collection check compares,
+so they are not run again here)."""
 
 
 def collected_tests(site: Path | None) -> list[str]:
