@@ -38,12 +38,14 @@ STANDARD_GRAVITY_M_S2 = 9.81
 
 
 def rule(check: Callable[[Any, "PendulumParameters"], bool] | None = None, requirement: str = "",
-         kind: str = "real", unit: str | None = None) -> dict:
+         kind: str = "real", unit: str | None = None, refinement: bool = False) -> dict:
     """Field metadata: ``check(value, params)`` must hold, else ValueError "FIELD REQUIREMENT, got VALUE"
     (``requirement`` may name other fields as ``{p.length_m}``); ``None``: no rule beyond the kind. ``kind``:
     "real" (a finite real number), "pair" (two of them) or "bool". ``unit``: the field enters the parameter
-    vector as itself, in that unit, with the index constant ``P_<FIELD NAME IN CAPITALS>``."""
-    return {"check": check, "requirement": requirement, "kind": kind, "unit": unit}
+    vector as itself, in that unit, with the index constant ``P_<FIELD NAME IN CAPITALS>``. ``refinement``: the
+    field belongs to a refining model and its default changes nothing; a scene's key leaves it out while it has
+    its default (``bench.problems.scene_key``), so adding such a field keeps every existing scene's key."""
+    return {"check": check, "requirement": requirement, "kind": kind, "unit": unit, "refinement": refinement}
 
 
 def airy_fraction(swing_angle_rad: float) -> float:
@@ -91,12 +93,12 @@ class PendulumParameters:
                                                       metadata=rule(kind="pair"))
     centrifugal: bool = field(default=True, metadata=rule(kind="bool"))
     support_anisotropy: float = field(default=0.0, metadata=rule(lambda v, p: 0.0 <= v < 1.0, "must lie in [0, 1)",
-                                                                 unit="1"))
-    anisotropy_axis_deg: float = field(default=0.0, metadata=rule(unit="deg"))
-    drag_linear_per_s: float = field(default=0.0, metadata=rule(lambda v, p: v >= 0, "must be >= 0", unit="1/s"))
-    drag_quadratic_per_m: float = field(default=0.0, metadata=rule(lambda v, p: v >= 0, "must be >= 0", unit="1/m"))
-    drive_gain_per_s: float = field(default=0.0, metadata=rule(lambda v, p: v >= 0, "must be >= 0", unit="1/s"))
-    drive_radius_m: float = field(default=0.1, metadata=rule(lambda v, p: v > 0, "must be > 0", unit="m"))
+                                                                 unit="1", refinement=True))
+    anisotropy_axis_deg: float = field(default=0.0, metadata=rule(unit="deg", refinement=True))
+    drag_linear_per_s: float = field(default=0.0, metadata=rule(lambda v, p: v >= 0, "must be >= 0", unit="1/s", refinement=True))
+    drag_quadratic_per_m: float = field(default=0.0, metadata=rule(lambda v, p: v >= 0, "must be >= 0", unit="1/m", refinement=True))
+    drive_gain_per_s: float = field(default=0.0, metadata=rule(lambda v, p: v >= 0, "must be >= 0", unit="1/s", refinement=True))
+    drive_radius_m: float = field(default=0.1, metadata=rule(lambda v, p: v > 0, "must be > 0", unit="m", refinement=True))
 
     def __post_init__(self) -> None:
         for spec in fields(self):

@@ -37,10 +37,15 @@ UNKNOWN_KEY_LABEL = "unknown physics"
 
 
 def physics_identity(scene: Scene) -> dict[str, Any]:
-    """The scene fields that determine its trajectory (not its name or texts)."""
+    """The scene fields that determine its trajectory (not its name or texts). A refinement's parameter
+    (``models.parameters.rule(refinement=True)``: support anisotropy, drag, drive) at its default changes nothing
+    and is left out, so that a field added with such a default keeps the keys of every stored scene."""
+    fields = {field.name: field for field in dataclasses.fields(scene.params)}
+    params = {name: value for name, value in dataclasses.asdict(scene.params).items()
+              if not (fields[name].metadata.get("refinement") and value == fields[name].default)}
     return {
         "model": scene.model,
-        "params": dataclasses.asdict(scene.params),
+        "params": params,
         "duration_s": scene.duration_s,
         "output_interval_s": scene.output_interval_s,
     }
