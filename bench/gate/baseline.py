@@ -18,7 +18,7 @@ from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.gate.evaluate import Outcome
 from foucault_bench.bench.gate.select import select_rows
 from foucault_bench.bench.gate.thresholds import Bound, Selection, Thresholds
-from foucault_bench.bench.history.changes import accuracy_changes, cost_change
+from foucault_bench.bench.history.changes import ACCURACY_COLUMNS, accuracy_changes, cost_change
 from foucault_bench.bench.problems.scene_key import scene_labels
 from foucault_bench.bench.run.compare import run_identity, scene_differences
 
@@ -34,15 +34,13 @@ def split_baseline(text: str) -> tuple[str, str | None]:
     return database, matrix_id or None
 
 
-def _expected(thresholds: Thresholds, frame: pd.DataFrame) -> dict[int, set[str] | None]:
-    """Row index of ``frame`` → the columns expected to change there (None: every column)."""
-    expected: dict[int, set[str] | None] = {}
+def _expected(thresholds: Thresholds, frame: pd.DataFrame) -> dict[int, set[str]]:
+    """Row index of ``frame`` → the accuracy columns expected to change there (a change naming no columns: all)."""
+    expected: dict[int, set[str]] = {}
     for change in thresholds.expected_changes:
+        columns = set(change.columns or ACCURACY_COLUMNS)
         for index in select_rows(frame, change.selection).index:
-            if not change.columns:
-                expected[int(index)] = None
-            elif expected.get(int(index), set()) is not None:
-                expected[int(index)] = {*(expected.get(int(index)) or set()), *change.columns}
+            expected.setdefault(int(index), set()).update(columns)
     return expected
 
 
@@ -71,7 +69,7 @@ def baseline_outcomes(thresholds: Thresholds, frame: pd.DataFrame, baseline: pd.
         setting = row["run"].rsplit(" ", 1)[-1]
         changed = accuracy_changes(before, row)
         allowed = expected.get(int(index), set())
-        unexpected = [column for column in changed if allowed is not None and column not in allowed]
+        unexpected = [column for column in changed if column not in allowed]
         detail = "; ".join(f"{column}: {before[column]!r} → {row[column]!r}"
                            + ("" if column in unexpected else " (expected)") for column in changed)
         outcomes.append(Outcome(accuracy_bound, str(row["scene_label"]), str(row["integrator"]), setting,
