@@ -195,9 +195,10 @@ def test_the_balance_of_the_reference_closes_and_a_coarse_run_does_not(model_nam
 # --- the report's table "against the measurement" (reports/halls.py) ----------------------------------------------
 
 
-HALLS_MATRIX = {"name": "tiny_halls", "scenes": ["guelph", "guelph_support"], "integrators": ["dop853", "rk4"],
-                "tol": [1e-6, 1e-8, 1e-10], "kh": [0.05]}
-"""The matrix whose rows the halls database holds: the Guelph scenes (Motala has no runs), three tolerances."""
+HALLS_MATRIX = {"name": "tiny_halls", "scenes": ["guelph", "guelph_support", "sion", "sion_support"],
+                "integrators": ["dop853", "rk4"], "tol": [1e-6, 1e-8, 1e-10], "kh": [0.05]}
+"""The matrix whose rows the halls database holds: the Guelph and Sion scenes (Motala has no runs), three
+tolerances."""
 SYNTHETIC_RATE_ERROR = {1e-6: 3e-9, 1e-8: 2e-12, 1e-10: -5e-11, 0.05: None}
 """Per tolerance (kh for rk4), the synthetic rate error of the run (rad/s, signed): the best run is the middle
 tolerance (not the first row nor the last); rk4 is the diverged run with the smallest error of all."""
@@ -247,6 +248,12 @@ def halls_database(tmp_path_factory):
     return database
 
 
+EXPECTED_TEXTBOOK_DEG_H = {"guelph": (10.36, 0.005), "sion": (360.0 / 33.26, 0.0005)}
+"""Per hall of the tiny matrix, the textbook rate its source expects (°/h) and the rounding of that figure:
+Guelph's 10.36°/h to the 0.005 of its last digit; Sion's one turn in 33.26 h to its last digit (0.005 h, 0.0016°/h;
+the scene's latitude is that figure's, rounded to 0.001°)."""
+
+
 def test_the_table_against_the_measurement_is_recomputed_from_the_rows(halls_database) -> None:
     import sqlite3
     import tomllib
@@ -257,29 +264,52 @@ def test_the_table_against_the_measurement_is_recomputed_from_the_rows(halls_dat
     with ResultsStore(halls_database) as store:
         table = halls.against_measurement(store.frame())
     with open(halls.HALLS_FILE, "rb") as handle:
-        measured = tomllib.load(handle)["measurement"]["guelph"]
+        measurements = tomllib.load(handle)["measurement"]
     with sqlite3.connect(halls_database) as connection:
         def best(scene: str) -> float:
             rate, = connection.execute(
                 "SELECT precession_rate_rad_s FROM runs WHERE scene = ? AND status = 'ok' "
                 "ORDER BY precession_rate_ref_error_rad_s LIMIT 1", (scene,)).fetchone()
             return -rate * 180.0 / np.pi * 3600.0
-        ideal, effect = best("guelph"), best("guelph_support")
-    row = table.set_index("hall").loc["guelph"]
-    assert list(table["hall"]) == ["guelph"]  # Motala has no runs here
-    assert row["measured_deg_h"] == measured["measured_deg_h"]
-    assert row["ideal_deg_h"] == pytest.approx(ideal, rel=1e-12)
-    assert row["with_effect_deg_h"] == pytest.approx(effect, rel=1e-12)
-    # the long-time mean, recomputed from the closed form's statement: √(a² + (kε/2)²) while the plane turns
-    params = SCENES_OF_FILE["guelph_support"].params
-    a = params.vertical_rate_rad_s
-    delta = 0.5 * params.pendulum_frequency_rad_s * params.support_anisotropy
-    assert row["with_effect_long_time_deg_h"] == pytest.approx(np.hypot(a, delta) * 180.0 / np.pi * 3600.0, rel=1e-12)
-    assert bool(row["ideal_inside"]) == (measured["low_deg_h"] <= ideal <= measured["high_deg_h"])
-    # the ideal prediction is the textbook 10.36°/h the source predicts, to its rounding
-    assert abs(ideal - 10.36) < 0.005
-    note = halls.closing_note(table)
-    assert f"{ideal:.2f}°/h lies {'inside' if row['ideal_inside'] else 'outside'}" in note
+        note = halls.closing_note(table)
+        assert list(table["hall"]) == ["guelph", "sion"]  # the file's order; Motala has no runs here
+        for hall, (textbook, rounding) in EXPECTED_TEXTBOOK_DEG_H.items():
+            measured = measurements[hall]
+            ideal, effect = best(measured["scene"]), best(measured["effects_scene"])
+            row = table.set_index("hall").loc[hall]
+            assert row["measured_deg_h"] == measured["measured_deg_h"]
+            assert row["ideal_deg_h"] == pytest.approx(ideal, rel=1e-12)
+            assert row["with_effect_deg_h"] == pytest.approx(effect, rel=1e-12)
+            # the long-time mean, recomputed from the closed form's statement: √(a² + (kε/2)²) while the plane turns
+            params = SCENES_OF_FILE[measured["effects_scene"]].params
+            a = params.vertical_rate_rad_s
+            delta = 0.5 * params.pendulum_frequency_rad_s * params.support_anisotropy
+            assert abs(delta) < abs(a)  # every hall's support turns (no locking) at its release 45° off the axis
+            long_time = np.hypot(a, delta) * 180.0 / np.pi * 3600.0
+            assert row["with_effect_long_time_deg_h"] == pytest.approx(long_time, rel=1e-12)
+            assert bool(row["ideal_inside"]) == (measured["low_deg_h"] <= ideal <= measured["high_deg_h"])
+            assert bool(row["long_time_inside"]) == (measured["low_deg_h"] <= long_time <= measured["high_deg_h"])
+            # the ideal prediction is the textbook rate the source expects, to that figure's rounding
+            assert abs(ideal - textbook) < rounding
+            assert f"{ideal:.2f}°/h lies {'inside' if row['ideal_inside'] else 'outside'}" in note
+            assert f"{long_time:.2f}°/h lies {'inside' if row['long_time_inside'] else 'outside'}" in note
+
+
+def test_every_measured_hall_has_its_scenes_a_source_and_a_range_about_its_rate() -> None:
+    """At least three real pendulums (the issue's acceptance), each with an ideal and an effects scene in the
+    file, a cited source and an uncertainty, and a measured rate inside its own range."""
+    import tomllib
+
+    from foucault_bench.reports import halls
+
+    with open(halls.HALLS_FILE, "rb") as handle:
+        measurements = tomllib.load(handle)["measurement"]
+    assert len(measurements) >= 3
+    for measured in measurements.values():
+        assert SCENES_OF_FILE[measured["scene"]].model == "linear"
+        assert SCENES_OF_FILE[measured["effects_scene"]].params.support_anisotropy > 0.0
+        assert measured["source"] and measured["uncertainty"]
+        assert measured["low_deg_h"] < measured["measured_deg_h"] < measured["high_deg_h"]
 
 
 SCENES_OF_FILE = {}
