@@ -115,7 +115,7 @@ def test_gauss_legendre_conservation_is_recomputed_from_the_rows(database) -> No
     table = nonconservative.conservation(frame(database)).set_index("kh")
     with sqlite3.connect(database) as connection:
         for kh in (0.2, 0.05):
-            def median(column: str, conserved: int) -> float:
+            def median(column: str, conserved: int, kh: float = kh) -> float:
                 values = [value for value, in connection.execute(
                     f"SELECT abs({column}) FROM runs WHERE integrator = 'gauss_legendre4' AND status = 'ok' AND kh = ? "
                     "AND energy_conserved = ?", (kh, conserved)) if value is not None]
