@@ -169,3 +169,22 @@ def test_advise_notes_the_leader_on_a_nonconservative_scene_only(database) -> No
     assert f"{symplectic} kh=0.04995, costs {symplectic_cost / leader_cost:.3g}× as much" in note
     assert advise_note(runs[runs["scene"] == "guelph"], 1e-6, "reference_error") is None
     assert advise_note(runs[runs["scene"] == "guelph_damped"], 1e-12, "reference_error") is None
+
+
+def test_the_advise_answer_carries_the_note_on_the_damped_scene_only(database) -> None:
+    """Through ``advise`` itself (no search): the damped scene's answer has the note, the ideal one's has none."""
+    from foucault_bench.bench.advise import advise
+    from foucault_bench.bench.advise.target import Target
+    from foucault_bench.bench.run.matrix import parse_matrix
+    from foucault_bench.bench.run.store import ResultsStore
+    from foucault_bench.bench.verdicts.nonconservative import advise_note
+
+    scenes = {spec.scene.name: spec.scene for spec in
+              parse_matrix(MATRIX, source="tiny_nonconservative", default_name="tiny_nonconservative").runs}
+    target = Target("reference_error", 1e-6)
+    runs = frame(database)
+    with ResultsStore(database) as store:
+        damped = advise(store, scenes["guelph_damped"], target, search_jobs=None)
+        ideal = advise(store, scenes["guelph"], target, search_jobs=None)
+    assert advise_note(runs[runs["scene"] == "guelph_damped"], 1e-6, "reference_error") in damped.notes
+    assert not [note for note in ideal.notes if "symplectic" in note]
