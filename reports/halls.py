@@ -13,6 +13,11 @@ rate is counter-clockwise positive, so each is minus the stored ``precession_rat
 * the long-time mean with the effect, from the closed form (``models.analytic.anisotropic_precession_rate_rad_s``:
   −√(a² + δ²) while the plane turns), which is what a measurement over days sees;
 * whether the ideal prediction and the long-time mean lie inside the measured range.
+
+Then, when the runs hold a scene whose model conserves no energy, "who leads when the forces are not
+conservative" (``bench.verdicts.nonconservative``): the leader and the cheapest symplectic method per scene and
+target, the loss of the symplectic methods' advantage, and Gauss-Legendre's energy error against its energy-balance
+residual.
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ from typing import Any
 import pandas as pd
 
 from foucault_bench.bench.problems.scenes import SCENE_DIRECTORY, SCENES
+from foucault_bench.bench.verdicts import nonconservative
 from foucault_bench.integrators import STATUS_OK
 from foucault_bench.models.analytic import anisotropic_precession_rate_rad_s
 from foucault_bench.reports.document import Heading, Paragraph
@@ -87,7 +93,13 @@ def closing_note(table: pd.DataFrame) -> str:
 
 
 def add_section(builder: Any, runs: pd.DataFrame) -> None:
-    """The section "Against the measurement" of the report (nothing when no measured hall has runs)."""
+    """The sections "Against the measurement" and "When the forces are not conservative" of the report (each
+    only when its rows exist)."""
+    _add_measurement(builder, runs)
+    _add_nonconservative(builder, runs)
+
+
+def _add_measurement(builder: Any, runs: pd.DataFrame) -> None:
     table = against_measurement(runs)
     if table.empty:
         return
@@ -97,3 +109,21 @@ def add_section(builder: Any, runs: pd.DataFrame) -> None:
         "scene, and its long-time mean from the closed form (models/README.md \"Anisotropic support\")."))
     builder.table(table, "against_measurement", "Against the measurement")
     builder.add(Paragraph(closing_note(table)))
+
+
+def _add_nonconservative(builder: Any, runs: pd.DataFrame) -> None:
+    table = nonconservative.leaders(runs)
+    if table.empty or table["conservative"].all():
+        return
+    loss = nonconservative.symplectic_loss(table)
+    builder.add(Heading("When the forces are not conservative"), Paragraph(
+        "With drag or a drive the flow is not Hamiltonian and a symplectic method keeps no long-time advantage "
+        "(bench/verdicts/nonconservative.py). Per scene and reference-error target: the cheapest run meeting it "
+        "and the cheapest run of a symplectic integrator, with its cost over the leader's; then the median of "
+        "that ratio on each kind of scene, and Gauss-Legendre's energy error (conservative scenes) against its "
+        "energy-balance residual (the others) per step."))
+    builder.table(table, "nonconservative_leaders", "Leaders and the cheapest symplectic run, per scene and target")
+    builder.table(loss, "symplectic_loss", "The symplectic methods' cost over the leader's, by kind of scene")
+    builder.table(nonconservative.conservation(runs), "gauss_legendre_conservation",
+                  "Gauss-Legendre: energy error against energy-balance residual")
+    builder.add(Paragraph(nonconservative.summary(table, loss)))

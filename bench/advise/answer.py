@@ -16,6 +16,7 @@ from foucault_bench.bench.advise.target import Target
 from foucault_bench.bench.problems.scene_key import scene_key
 from foucault_bench.bench.problems.scenes import Scene
 from foucault_bench.bench.run.store import ResultsStore
+from foucault_bench.bench.verdicts.nonconservative import advise_note
 from foucault_bench.bench.verdicts.pareto import cheapest_meeting, cost_column, usable_runs
 
 NEXT = 2
@@ -69,6 +70,7 @@ def advise(store: ResultsStore, scene: Scene, target: Target, *, search_jobs: in
     if not records and not usable.empty:
         best = run_record(runs.loc[usable["error"].idxmin()], target.metric, cost)
     notes = same_name_notes(store.frame(all_runs=True), scene)
+    notes += [note] if (note := advise_note(runs, target.value, target.metric)) else []
     if not runs.empty:
         from foucault_bench.bench.provenance import code_version
 
