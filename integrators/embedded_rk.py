@@ -1,7 +1,7 @@
 """The compiled embedded Runge-Kutta integrators: ``EmbeddedRungeKutta``, the base of every pair given as a
 ``ButcherTableau`` (a subclass declares ``tableau`` and its facts and registers), the driver cache, the check that a
 pair declared to take the steps of a scipy solver has that solver's tableau (``scipy_twin_problems``,
-``scipy_twins``), and the pair's main method stepped at a fixed step (``fixed_step_twin``) for the order check.
+``scipy_twins``).
 
 The driver, its step-size control and its floating-point order are ``integrators.embedded_driver``.
 """
@@ -17,7 +17,6 @@ from scipy.integrate import OdeSolver
 from foucault_bench.integrators.adaptive import AdaptiveIntegrator, absolute_tolerance, step_budget, turning_points
 from foucault_bench.integrators.base import STATUS_FAILED, Problem, Solution, StreamedMetrics
 from foucault_bench.integrators.embedded_driver import CODE_OK, MESSAGES, STATE_SIZE, build_driver
-from foucault_bench.integrators.explicit_rk import ExplicitRungeKutta
 from foucault_bench.integrators.tableau import ButcherTableau
 from foucault_bench.models import Model
 
@@ -119,19 +118,3 @@ def scipy_twins() -> dict[str, str]:
                  if (solver := getattr(integrator, "solver_class", None)) is not None}
     return {name: by_solver[integrator.steps_of] for name, integrator in sorted(REGISTRY.items())
             if isinstance(integrator, EmbeddedRungeKutta) and integrator.steps_of in by_solver}
-
-
-
-@functools.lru_cache(maxsize=None)
-def fixed_step_twin(integrator: EmbeddedRungeKutta) -> ExplicitRungeKutta:
-    """The pair's main method (its ``c``, ``A`` and ``b``, without error estimate or dense output) as an unregistered
-    fixed-step integrator (``integrators.explicit_rk``): the method whose order the pair declares, so that the
-    generic order check (``bench.gate.conformance``) measures it over a step sweep, which error against tolerance
-    cannot (HNW I, §II.4: the tolerance sets the step only through the error estimate)."""
-    tableau = integrator.tableau
-    plain = ButcherTableau(name=f"{tableau.name} (main method)", c=tableau.c, a=tableau.a, b=tableau.b,
-                           order=tableau.order, reference=tableau.reference)
-    twin = type(f"{type(integrator).__name__}FixedStep", (ExplicitRungeKutta,),
-                {"name": f"{integrator.name}_fixed_step", "tableau": plain, "reference": tableau.reference,
-                 "__module__": __name__})
-    return twin()

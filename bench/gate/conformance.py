@@ -18,10 +18,7 @@ whether the suite will treat the method correctly. Every check returns a ``Check
    explicit Coriolis kick in a Verlet scheme, stays below the (kh)² term at every measurable step and a wrong
    order would go unseen. References: the closed form for the linear model (``models.analytic``), heyoka's
    Taylor method at ``REFERENCE_TOL`` for the others (errors ~1e-15 of the amplitude, far below ``FLOOR_ERROR``).
-   Adaptive integrators are skipped (error against tolerance is no order), except the compiled embedded pairs,
-   whose main method is swept at fixed steps (``integrators.embedded_rk.fixed_step_twin``). A method without a
-   declared limit whose first point lies within ``points_needed(p) − 1`` halvings of the floor starts again at
-   twice the step, up to kh = ``MAX_START_KH`` (Verner's order-9 pair is at 1e-10 at kh = 0.47).
+   Adaptive integrators are skipped: error against tolerance is no order.
 2. **stable below the limit** and **diverges above the limit**, for every declared ``stability_limit_kh``:
    on the undamped oscillator ẍ = −k²x (the linear model with no rotation, where the limit is defined;
    Hairer, Nørsett & Wanner, Solving ODEs I, §IV.2) the energy error reached after ``STABILITY_STEPS`` steps
@@ -56,7 +53,6 @@ import numpy as np
 
 from foucault_bench.bench.verdicts.convergence import observed_order
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK, Integrator, Problem, get_integrator
-from foucault_bench.integrators.embedded_rk import EmbeddedRungeKutta, fixed_step_twin
 from foucault_bench.models import MODELS, Model, PendulumParameters
 from foucault_bench.models.analytic import linear_exact
 from foucault_bench.models.parameters import P_K2, P_LENGTH
@@ -67,8 +63,6 @@ relatively O(kh) smaller: measured on the built-in methods, every model, |observ
 a wrong method is off by a whole order or more (the mutants of tests/check_mutants.py: 1.9 for 4, 1.0 for 2)."""
 
 START_KH = 0.5
-MAX_START_KH = 1.0
-"""Coarsest restart of a sweep without a declared stability limit: about six steps per swing period."""
 MAX_ERROR = 0.1
 """Errors (of the final position, in units of the amplitude) above this are not asymptotic yet."""
 FLOOR_ERROR = 1e-10
@@ -186,15 +180,6 @@ def order_parameters(model: Model) -> PendulumParameters:
     return model.with_example_parameters(ORDER_PARAMS)
 
 
-def starts_coarser(limit: float | None, order: int, kh: float, error: float) -> bool:
-    """Whether a sweep whose first point (k·h = ``kh``) has ``error`` starts again at twice the step: with a
-    declared limit, when the next halving would reach the floor (up to ½ the limit); without one, when fewer than
-    ``points_needed(order)`` halvings are left above the floor (up to ``MAX_START_KH``)."""
-    if limit:
-        return error < FLOOR_ERROR * 2.0 ** order and 2 * kh <= 0.5 * limit
-    return error < FLOOR_ERROR * 2.0 ** (order * (points_needed(order) - 1)) and 2 * kh <= MAX_START_KH
-
-
 def measure_order(integrator: Integrator, model: Model, params: PendulumParameters | None = None,
                   periods: float = ORDER_PERIODS) -> OrderMeasurement:
     """Observed order of ``integrator`` on ``model`` over a step sweep derived from its declared facts (see the
@@ -222,7 +207,7 @@ def measure_order(integrator: Integrator, model: Model, params: PendulumParamete
             error = float(np.hypot(*(solution.y[-1, :2] - reference[:2])) / params.amplitude_m)
         steps.append(duration / n_steps)
         errors.append(error)
-        if len(errors) == 1 and starts_coarser(limit, order, kh, error):
+        if len(errors) == 1 and error < FLOOR_ERROR * 2.0 ** order and limit and 2 * kh <= 0.5 * limit:
             steps.clear()  # a high order: the next halving would reach the floor, so start coarser
             errors.clear()
             kh *= 2.0
@@ -239,17 +224,15 @@ def measure_order(integrator: Integrator, model: Model, params: PendulumParamete
 
 def check_order(integrator: Integrator, model: Model) -> Check:
     name = f"order on {model.name}"
-    swept = fixed_step_twin(integrator) if isinstance(integrator, EmbeddedRungeKutta) else integrator
-    if swept.adaptive or integrator.order is None:
+    if integrator.adaptive or integrator.order is None:
         why = "adaptive: error against tolerance is no order" if integrator.adaptive else "no order declared"
         return Check(name, None, why)
     params = order_parameters(model)
-    measured = measure_order(swept, model, params)
+    measured = measure_order(integrator, model, params)
     holds = bool(abs(measured.order - integrator.order) <= ORDER_TOLERANCE)
     points = ", ".join(f"{error:.1e}" for error in measured.errors[np.isfinite(measured.errors)][-4:])
     example = "".join(f", {key} = {value!r}" for key, value in model.example_parameters.items())
-    what = " of the main method at fixed steps" if swept is not integrator else ""
-    detail = (f"observed order {measured.order:.2f} of the final-position error{what}, declared {integrator.order}, "
+    detail = (f"observed order {measured.order:.2f} of the final-position error, declared {integrator.order}, "
               f"allowed ±{ORDER_TOLERANCE}: {'held' if holds else 'NOT held'}; "
               f"{measured.errors.size} steps down to kh = {measured.step_sizes_s[-1] * params.pendulum_frequency_rad_s:.2g}"
               f"{example}, finest errors {points}" + (f"; {measured.note}" if measured.note else ""))
