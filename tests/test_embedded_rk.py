@@ -27,6 +27,7 @@ import numpy as np
 import pytest
 
 from foucault_bench.bench.problems.scenes import SCENES
+from foucault_bench.models import MODELS
 from foucault_bench.integrators import REGISTRY, Solution, built_in_names, get_integrator
 from foucault_bench.integrators.embedded_rk import EmbeddedRungeKutta, scipy_twins
 
@@ -230,34 +231,44 @@ def test_vern7_s_interpolant_is_order_6_and_not_7() -> None:
 
 MAIN_METHOD_STEPS = {"vern7": (8, 12, 16, 24, 32, 48, 64), "vern9": (4, 6, 8, 12, 16, 24, 32)}
 """Steps per small-swing period for the order of a pair's main method, in ratios 3/2 and 4/3: from about 1e-6 of
-the amplitude to above the round-off floor (measured: vern7 1.1e-6 … 2.9e-13, vern9 8.0e-6 … 2.9e-14)."""
+the amplitude to above the round-off floor (measured on the linear model: vern7 1.1e-6 … 2.9e-13, vern9
+8.0e-6 … 2.9e-14)."""
+
+SHORT_SCALE_MODELS = {
+    "damped_linear": "the drag's speed floor v_s = 1 mm/s (observed 6.85 and 9.47, errors stalling near 1e-10)",
+    "driven_linear": "the drive's 5 cm width against a 0.3 m swing (observed 4.51 and 7.88)",
+}
+"""Models whose forces vary on scales far below the swing's at their example parameters: at these steps the
+errors of an order-7 or order-9 method are not asymptotic yet (integrators/README.md "Verner's pairs")."""
 
 
 @pytest.mark.parametrize("name", sorted(MAIN_METHOD_STEPS))
-def test_the_main_method_of_a_verner_pair_has_the_declared_order(name: str) -> None:
-    """The pair's c, A and b stepped at fixed steps (``integrators.explicit_rk``) on the linear model against its
-    closed form over ``ORDER_PERIODS`` periods: the observed order (``bench.verdicts.convergence.observed_order``)
-    is the declared one within 0.1 (measured: 7.09 and 9.04). The selftest's sweep skips adaptive integrators;
-    run on these main methods, its halvings from kh ≈ 0.9 reach its 1e-10 floor within 3-4 points, where the
-    terms after the leading one (whose coefficient Verner minimised) still tilt the slope: 7.3 and 9.7."""
-    from foucault_bench.bench.gate.conformance import ORDER_PARAMS, ORDER_PERIODS
+@pytest.mark.parametrize("model_name", [name for name in MODELS if name not in SHORT_SCALE_MODELS])
+def test_the_main_method_of_a_verner_pair_has_the_declared_order(name: str, model_name: str) -> None:
+    """The pair's c, A and b stepped at fixed steps (``integrators.explicit_rk``) over the selftest's order run
+    (``ORDER_PERIODS`` periods at the model's example parameters, against the selftest's reference): the observed
+    order (``bench.verdicts.convergence.observed_order``) is the declared one within 0.1 (measured 7.08-7.10 and
+    9.04-9.06). The selftest itself skips adaptive integrators; run on these main methods, its halvings from
+    kh ≈ 0.9 reach its 1e-10 floor within 3-4 points, where the terms after the leading one (whose coefficient
+    Verner minimised) still tilt the slope: 7.3 and 9.7 on the linear model."""
+    from foucault_bench.bench.gate.conformance import ORDER_PERIODS, order_parameters, reference_final_state
     from foucault_bench.bench.verdicts.convergence import observed_order
     from foucault_bench.integrators import Problem
     from foucault_bench.integrators.explicit_rk import ExplicitRungeKutta
     from foucault_bench.integrators.tableau import ButcherTableau
-    from foucault_bench.models import MODELS
-    from foucault_bench.models.analytic import linear_exact
 
     pair = type(get_integrator(name)).tableau
     plain = ButcherTableau(name=pair.name, c=pair.c, a=pair.a, b=pair.b, order=pair.order, reference=pair.reference)
     method = type("MainMethod", (ExplicitRungeKutta,), {"name": f"{name}_main", "tableau": plain,
                                                         "reference": pair.reference})()
-    duration_s = ORDER_PERIODS * ORDER_PARAMS.small_swing_period_s
-    exact = linear_exact(ORDER_PARAMS, np.array([duration_s]))[0]
-    problem = Problem(MODELS["linear"], ORDER_PARAMS, np.array([0.0, duration_s]))
-    steps_s = [ORDER_PARAMS.small_swing_period_s / n for n in MAIN_METHOD_STEPS[name]]
-    errors = [float(np.hypot(*(method.solve(problem, step_s=h, monitor=False).y[-1, :2] - exact[:2])))
-              / ORDER_PARAMS.amplitude_m for h in steps_s]
+    model = MODELS[model_name]
+    params = order_parameters(model)
+    duration_s = ORDER_PERIODS * params.small_swing_period_s
+    reference = reference_final_state(model, params, duration_s)
+    problem = Problem(model, params, np.array([0.0, duration_s]))
+    steps_s = [params.small_swing_period_s / n for n in MAIN_METHOD_STEPS[name]]
+    errors = [float(np.hypot(*(method.solve(problem, step_s=h, monitor=False).y[-1, :2] - reference[:2])))
+              / params.amplitude_m for h in steps_s]
     assert observed_order(steps_s, errors) == pytest.approx(pair.order, abs=0.1), errors
 
 
