@@ -1,22 +1,23 @@
-"""``vern7``: Verner's "most efficient" 7(6) pair with its 16-stage interpolant, compiled (``integrators.embedded_rk``).
+"""``vern7``: Verner's "most efficient" 7(6) pair with its 16-stage interpolant, compiled
+(``integrators.embedded_rk``).
 
 Order 7 with 10 stages per step attempt, error estimated against the embedded 6th-order solution (controller
 exponent −1/7), and a continuous extension for the output grid and the turning points, checked here as order 6
-(below). Coefficients:
-J. H. Verner, "Numerically optimal Runge–Kutta pairs with interpolants", Numer. Algorithms 53, 383 (2010), the
-"most efficient" RK7(6)10 pair of his coefficient pages (Simon Fraser University), with its interpolant of order 7
-(six more stages, the first f(t + h, y_new)) as first posted; transcribed from the exact values in SciML's OrdinaryDiffEq.jl
-(``lib/OrdinaryDiffEqVerner/src/verner_tableaus.jl``: ``Vern7Tableau``, ``Vern7ExtraStages``,
-``Vern7InterpolationCoefficients``), fractions as fractions and decimals with all 40 published digits. Stages are
-numbered as in the paper (``tableau.from_stage_data``); the tableau checks every order condition of the pair and
-of the interpolant (HNW I, §II.2, §II.6) when the module is imported.
+(below). Coefficients: J. H. Verner, "Numerically optimal Runge–Kutta pairs with interpolants", Numer.
+Algorithms 53, 383 (2010), the "most efficient" RK7(6)10 pair of his coefficient pages (Simon Fraser
+University), with the interpolant first posted for it (six more stages, the first f(t + h, y_new)); transcribed
+from the exact values in SciML's OrdinaryDiffEq.jl (``lib/OrdinaryDiffEqVerner/src/verner_tableaus.jl``:
+``Vern7Tableau``, ``Vern7ExtraStages``, ``Vern7InterpolationCoefficients``), fractions as fractions and decimals
+with all 40 published digits. Stages are numbered as in the paper (``tableau.from_stage_data``); the tableau
+checks every order condition of the pair and of the interpolant (HNW I, §II.2, §II.6) when the module is
+imported.
 
 The interpolant's order: that check finds every condition of order 6 met, and at order 7 five trees per power of
-θ failing by up to 4e-5 (the trees through the stages of stage order 3), so it is declared and validated as
-``dense_order = 6``. Verner's coefficient pages say the same: the interpolant first posted for this pair
-"satisfied some but not all conditions of order 7", and a corrected one needs another node c₁₂ (a root of a
-quadratic). The output-grid error of an order-6 interpolant is O(h⁷), the order of the global error, so the
-observed order at the output times stays 7 (``selftest``).
+θ failing by up to 4e-5 (trees through the stages of stage order 3), so it is declared and validated as
+``dense_order = 6``. Verner's coefficient pages report the same of the interpolants first posted for his 7(6)
+pairs: they "satisfied some but not all conditions of order 7", and a corrected one needs a node c₁₂ that is a
+root of a quadratic. An order-6 interpolant errs by O(h⁷) within a step, the order of the global error of the
+order-7 method, so the output keeps the method's order.
 
 Output: **the interpolant on the grid**, not steps onto the grid points. Steps cut to land on every output time
 would cap the step at the grid interval (about an eighth of a swing), so at loose tolerances the run would take
@@ -32,9 +33,9 @@ Tolerance mapping: rtol = tol, atol = tol × (R, R, kR, kR) (``integrators.adapt
 controller and initial step (``integrators.embedded_rk``), as for the other compiled pairs.
 
 Stability: explicit, bounded stability region; on the undamped oscillator |R(ikh)|, R(z) = 1 + z bᵀ(I − zA)⁻¹𝟙
-(Hairer & Wanner, Solving ODEs II, §IV.2), stays ≤ 1 only up to kh ≈ 0.087 and exceeds 1 slightly beyond (1.7e-9 at kh = 0.5, 5.4e-7 at 1); the
-error control keeps that growth below the tolerance, so the steps are accuracy-limited at every tolerance
-used here.
+(Hairer & Wanner, Solving ODEs II, §IV.2), stays ≤ 1 only up to kh ≈ 0.087 and exceeds 1 slightly beyond
+(1.7e-9 at kh = 0.5, 5.4e-7 at 1); the error control keeps that growth below the tolerance, so the steps are
+accuracy-limited at every tolerance used here.
 """
 
 from __future__ import annotations

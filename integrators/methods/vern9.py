@@ -1,4 +1,5 @@
-"""``vern9``: Verner's "most efficient" 9(8) pair with its order-9 interpolant, compiled (``integrators.embedded_rk``).
+"""``vern9``: Verner's "most efficient" 9(8) pair with its order-9 interpolant, compiled
+(``integrators.embedded_rk``).
 
 Order 9 with 16 stages per step attempt, error estimated against the embedded 8th-order solution (controller
 exponent −1/9), and a continuous extension of order 9 for the output grid and the turning points. Coefficients:
@@ -8,9 +9,9 @@ J. H. Verner, "Numerically optimal Runge–Kutta pairs with interpolants", Numer
 (``lib/OrdinaryDiffEqVerner/src/verner_tableaus.jl``: ``Vern9Tableau``, ``Vern9ExtraStages``,
 ``Vern9InterpolationCoefficients``), fractions as fractions and decimals with all 40 published digits; the
 entries Verner gives in closed form with √6 (nodes 3, 4, 6, 7 and rows 3-16 of the coupling) as 40-digit
-decimals evaluated from those forms (mpmath, 60 digits). Stages are
-numbered as in the paper (``tableau.from_stage_data``); the tableau checks every order condition of the pair and
-of the interpolant (HNW I, §II.2, §II.6) when the module is imported.
+decimals evaluated from those forms (mpmath, 60 digits). Stages are numbered as in the paper
+(``tableau.from_stage_data``); the tableau checks every order condition of the pair and of the interpolant
+(HNW I, §II.2, §II.6) when the module is imported.
 
 Output: **the interpolant on the grid**, not steps onto the grid points. Steps cut to land on every output time
 would cap the step at the grid interval (about an eighth of a swing), so at loose tolerances the run would take
