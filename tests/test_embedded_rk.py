@@ -10,6 +10,10 @@ round-off (``round_off_bound``).
 Runs are short (``SHORT_INTERVALS`` output intervals of each scene, 2-3 swings) except the Panthéon at tol 1e-8,
 run in full (1 h). The full check over every scene and every default-matrix tolerance is described in
 integrators/README.md ("Compiled embedded Runge-Kutta pairs").
+
+Every compiled pair (those without a scipy twin too: ``tsit5``, Verner's ``vern7`` and ``vern9``) is also
+checked for its counters and cost basis; Verner's pairs for the declared order of their main methods at fixed
+steps on the models whose forces vary on the swing's scale, and ``vern7`` for the order of its interpolant.
 """
 
 from __future__ import annotations
