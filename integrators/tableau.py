@@ -10,7 +10,7 @@ A tableau is checked when it is built, so a mistyped coefficient cannot reach an
 * row sums Σⱼ aᵢⱼ = cᵢ (Hairer, Nørsett & Wanner, Solving ODEs I, §II.1, eq. (1.9));
 * the order conditions of the main weights ``b`` up to ``order``, of each embedded solution b − e up to its
   declared order, and of the dense output up to ``dense_order`` (the last two where given): for every rooted tree t with ρ(t) ≤ p,
-  Σᵢ bᵢ Φᵢ(t) = 1/γ(t) (HNW I, §II.2, Theorem 2.13; the trees are generated here, 200 of them up to order 8),
+  Σᵢ bᵢ Φᵢ(t) = 1/γ(t) (HNW I, §II.2, Theorem 2.13; the trees are generated here, 719 of them up to order 9),
   and for a continuous extension with weights bᵢ(θ), Σᵢ bᵢ(θ) Φᵢ(t) = θ^ρ(t)/γ(t) (HNW I, §II.6, Theorem 6.1),
   checked coefficient by coefficient of the polynomials in θ.
 
@@ -31,6 +31,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from fractions import Fraction
 
 import numpy as np
 
@@ -39,8 +40,8 @@ CONDITION_RTOL = 1.0e-13
 dense output. The shipped tableaux measure at most 8.4e-17 (below one unit of 2⁻⁵³): a margin of about 1000,
 and a coefficient wrong in its seventh significant digit is rejected (tests/test_tableau.py)."""
 
-MAX_CHECKED_ORDER = 8
-"""Order conditions are generated up to this order (200 rooted trees); DOP853 needs 8."""
+MAX_CHECKED_ORDER = 9
+"""Order conditions are generated up to this order (719 rooted trees); Vern9 and its interpolant need 9."""
 
 Tree = tuple  # a rooted tree: the sorted tuple of its children's trees; the single node is ()
 
@@ -75,24 +76,37 @@ def tree_density(tree: Tree) -> int:
     return tree_order(tree) * math.prod(tree_density(child) for child in tree)
 
 
-def elementary_weights(a: np.ndarray, tree: Tree) -> np.ndarray:
-    """Φᵢ(t) per stage: 1 for the single node, Πₖ (A Φ(tₖ))ᵢ over the children tₖ (HNW I, Definition II.2.9).
-    With |A| this gives the sum of the absolute values of the terms (the round-off scale of a condition)."""
-    weights = np.ones(a.shape[0])
-    for child in tree:
-        weights = weights * (a @ elementary_weights(a, child))
-    return weights
+@functools.cache
+def rooted_trees_up_to(order: int) -> tuple[Tree, ...]:
+    """Every rooted tree with at most ``order`` nodes, by order (719 up to order 9)."""
+    return tuple(tree for rho in range(1, order + 1) for tree in rooted_trees(rho))
+
+
+@functools.lru_cache(maxsize=64)
+def _elementary_table(a_bytes: bytes, rows: int, order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(Φ, Φ over |A|, 1/γ) for every tree up to ``order``, Φ as a (trees × stages) matrix. The elementary
+    weights Φᵢ(t) are 1 for the single node and Πₖ (A Φ(tₖ))ᵢ over the children tₖ (HNW I, Definition II.2.9);
+    with |A| they give the sum of the absolute values of the terms (the round-off scale of a condition). Each
+    tree's weights are built once from its children's (which precede it), so that every weight vector of one
+    tableau is checked by one matrix product."""
+    a = np.frombuffer(a_bytes).reshape(rows, rows)
+    trees = rooted_trees_up_to(order)
+    index = {tree: position for position, tree in enumerate(trees)}
+    phi, phi_abs = np.ones((len(trees), rows)), np.ones((len(trees), rows))
+    for position, tree in enumerate(trees):
+        for child in tree:
+            phi[position] *= a @ phi[index[child]]
+            phi_abs[position] *= np.abs(a) @ phi_abs[index[child]]
+    return phi, phi_abs, np.array([1.0 / tree_density(tree) for tree in trees])
 
 
 def order_condition_residuals(a: np.ndarray, weights: np.ndarray, order: int) -> list[tuple[Tree, float, float]]:
     """(tree, residual Σ wᵢΦᵢ(t) − 1/γ(t), round-off scale) for every tree up to ``order``."""
-    rows = []
-    for rho in range(1, order + 1):
-        for tree in rooted_trees(rho):
-            value = float(weights @ elementary_weights(a, tree))
-            scale = float(np.abs(weights) @ elementary_weights(np.abs(a), tree)) + 1.0 / tree_density(tree)
-            rows.append((tree, value - 1.0 / tree_density(tree), scale))
-    return rows
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    phi, phi_abs, inverse_density = _elementary_table(a.tobytes(), a.shape[0], order)
+    residuals = phi @ weights - inverse_density
+    scales = phi_abs @ np.abs(weights) + inverse_density
+    return list(zip(rooted_trees_up_to(order), residuals.tolist(), scales.tolist(), strict=True))
 
 
 def _vector(values, length: int, what: str) -> np.ndarray:
@@ -305,3 +319,34 @@ class ButcherTableau:
             problems += self._condition_problems(f"dense output, θ^{k + 1}", full_a, weights[:, k],
                                                  min(self.dense_order, MAX_CHECKED_ORDER), power=k + 1)
         return problems
+
+
+def exact(text: str) -> float:
+    """A coefficient given as exact text (an integer, a fraction "n/d" or a decimal with every published digit),
+    rounded once to the nearest double (Python's ``Fraction`` to ``float`` conversion rounds correctly)."""
+    return float(Fraction(text))
+
+
+def from_stage_data(name: str, *, stages: int, nodes: dict[int, str], coupling: dict[int, dict[int, str]],
+                    weights: dict[int, str], error_weights: dict[int, str], dense_weights: dict[int, tuple[str, ...]],
+                    order: int, error_order: int, dense_order: int, reference: str) -> ButcherTableau:
+    """An embedded pair with dense output from sparse data numbered as in the papers (stage 1 first), values as
+    exact text (``exact``; absent entries are 0): ``nodes`` {stage: c}; ``coupling`` {stage: {stage: a}} for
+    stages 2…s and for the dense-output stages s + 2, …; stage s + 1 is f(t + h, y_new) (its row is b, not
+    given); ``weights`` {stage: b}; ``error_weights`` {stage: b − b̂}; ``dense_weights`` {stage: coefficients of
+    θ, θ², …} of bᵢ(θ)."""
+    total = max([stages + 1, *coupling])
+    degree = max(len(row) for row in dense_weights.values())
+
+    def vector(entries: dict[int, str], length: int) -> tuple[float, ...]:
+        return tuple(exact(entries[i + 1]) if i + 1 in entries else 0.0 for i in range(length))
+
+    rows = {i: vector(coupling.get(i, {}), total) for i in range(1, total + 1)}
+    return ButcherTableau(
+        name=name, order=order, error_order=error_order, dense_order=dense_order, reference=reference,
+        c=vector(nodes, stages), a=tuple(rows[i][:stages] for i in range(1, stages + 1)), b=vector(weights, stages),
+        error_weights=vector(error_weights, stages + 1),
+        dense_c=vector(nodes, total)[stages + 1:], dense_a=tuple(rows[i] for i in range(stages + 2, total + 1)),
+        dense_weights=tuple(tuple(exact(x) for x in dense_weights.get(i, ())) + (0.0,) * (
+            degree - len(dense_weights.get(i, ()))) for i in range(1, total + 1)),
+    )

@@ -14,6 +14,7 @@ from foucault_bench.integrators.embedded_rk import EmbeddedRungeKutta
 from foucault_bench.integrators.explicit_rk import ExplicitRungeKutta
 from foucault_bench.integrators.tableau import (
     CONDITION_RTOL,
+    MAX_CHECKED_ORDER,
     ButcherTableau,
     order_condition_residuals,
     rooted_trees,
@@ -36,10 +37,11 @@ def test_rooted_tree_counts_and_densities() -> None:
 
 
 def test_the_shipped_tableaux_are_the_expected_ones() -> None:
-    assert set(TABLEAUX) == {"dopri5", "dop853", "tsit5", "explicit_euler", "heun3", "rk4"}
+    assert set(TABLEAUX) == {"dopri5", "dop853", "tsit5", "vern7", "vern9", "explicit_euler", "heun3", "rk4"}
     facts = {name: (t.stages, t.order, t.error_order, t.error_estimator_order, t.extra_stages, t.dense_order)
              for name, t in TABLEAUX.items() if t.is_embedded}
-    assert facts == {"dopri5": (6, 5, 4, 4, 0, 4), "tsit5": (6, 5, 4, 4, 0, 4), "dop853": (12, 8, 5, 7, 3, 7)}
+    assert facts == {"dopri5": (6, 5, 4, 4, 0, 4), "tsit5": (6, 5, 4, 4, 0, 4), "dop853": (12, 8, 5, 7, 3, 7),
+                     "vern7": (10, 7, 6, 6, 5, 6), "vern9": (16, 9, 8, 8, 9, 9)}
     plain = {name: (t.stages, t.order, t.error_order, t.dense_order, t.has_dense_output)
              for name, t in TABLEAUX.items() if not t.is_embedded}
     assert plain == {"explicit_euler": (1, 1, None, None, False), "heun3": (3, 3, None, None, False),
@@ -112,11 +114,12 @@ def test_structural_mistakes_are_reported() -> None:
     with pytest.raises(ValueError, match="b must hold 6"):
         dataclasses.replace(tableau, b=tableau.b[:5])
     with pytest.raises(ValueError, match="order must be"):
-        dataclasses.replace(tableau, order=9)
+        dataclasses.replace(tableau, order=MAX_CHECKED_ORDER + 1)
 
 
 @pytest.mark.parametrize(("name", "stable_up_to", "unstable_at"),
-                         [("dopri5", 0.99, 1.0), ("tsit5", 0.47, 0.5), ("dop853", 5.95, 6.0)])
+                         [("dopri5", 0.99, 1.0), ("tsit5", 0.47, 0.5), ("dop853", 5.95, 6.0), ("vern7", 0.08, 0.5),
+                          ("vern9", 2.75, 2.8)])
 def test_imaginary_axis_stability_stated_in_the_docstrings(name: str, stable_up_to: float, unstable_at: float) -> None:
     """|R(iy)| ≤ 1 on (0, stable_up_to] and > 1 at unstable_at, R(z) = 1 + z bᵀ(I − zA)⁻¹𝟙 (HW II, §IV.2)."""
     tableau = TABLEAUX[name]
