@@ -9,8 +9,10 @@ control is ``gbs``. Higher fixed orders lose their order on the damped pendulum 
 (integrators/README.md "Gragg-Bulirsch-Stoer extrapolation").
 
 Stability: on the undamped oscillator the one-step map's spectral radius is |R(ikH)| with R the stability
-polynomial of T₂₂ (degree 7), below 1 up to kH = 3.36359 (the smallest positive root of |R(iy)|² − 1,
-``integrators.extrapolation.oscillator_stability_limit``), beyond RK4's 2√2.
+polynomial of T₂₂, R(z) = 1 + z + z²/2 + z³/6 + z⁴/24 + z⁵/192, below 1 up to kH = 3.36359 (the smallest positive
+root of |R(iy)|² − 1, ``integrators.extrapolation.oscillator_stability_limit``), beyond RK4's 2√2. Its phase
+lags by arg R(iy) − y = −y⁵/320 + O(y⁷) per step (R(z) − e^z = −z⁵/320 + …), so the swing frequency is low by
+(kH)⁴/320 and, by the argument given for RK4 in integrators/README.md, the precession is too slow by (kH)⁴/64.
 """
 
 from typing import ClassVar
