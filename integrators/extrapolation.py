@@ -2,20 +2,19 @@
 
 One *line* of the extrapolation table integrates ż = f(z) (z = (x, y, ẋ, ẏ)) over a step H with n (even)
 substeps h = H/n of the explicit midpoint rule started by an Euler step, and ends with Gragg's smoothing step
-(Gragg, SIAM J. Numer. Anal. 2, 384 (1965); Hairer, Nørsett & Wanner, Solving ODEs I, 2nd ed., §II.9,
-eqs. (9.13)-(9.16)):
+(Gragg, SIAM J. Numer. Anal. 2, 384 (1965); Hairer, Nørsett & Wanner, Solving ODEs I, 2nd ed., §II.9):
 
     z₁ = z₀ + h f(z₀),   z_{m+1} = z_{m−1} + 2h f(z_m)  (m = 1 … n−1),   T = (z_{n−1} + z_n + h f(z_n)) / 2.
 
-T has an asymptotic expansion in even powers of h (HNW I, Thm. II.9.1 and §II.9 "Gragg's smoothing"), so the
+T has an asymptotic expansion in even powers of h (Gragg; HNW I, §II.9), so the
 values T_{j1} of lines with n₁ < n₂ < … are extrapolated to h = 0 by the Aitken-Neville recursion
 
-    T_{j,l+1} = T_{j,l} + (T_{j,l} − T_{j−1,l}) / ((n_j/n_{j−l})² − 1)        (HNW I, eq. (9.10)),
+    T_{j,l+1} = T_{j,l} + (T_{j,l} − T_{j−1,l}) / ((n_j/n_{j−l})² − 1)        (HNW I, §II.9),
 
 and T_{kk} has order 2k. Each line costs n_j evaluations after the shared f(z₀): line j of the table costs
-A_j = 1 + n₁ + … + n_j evaluations in all (HNW I, eq. (9.25)).
+A_j = 1 + n₁ + … + n_j evaluations in all (HNW I, §II.9, the work per step of ODEX's order control).
 
-* ``midpoint_line``: one line, compiled from the model's acceleration, in scalars.
+* ``build_midpoint_line``: one line, compiled from the model's acceleration, in scalars.
 * ``extrapolation_weights``: T_{kk} = Σ_j c_j T_{j1} with c_j = Π_{l≠j} n_j²/(n_j² − n_l²), the Lagrange form of
   the same interpolation polynomial in h² evaluated at 0; the fixed-order integrator
   (``FixedOrderExtrapolation``) sums it in four scalars per step, without a table.
@@ -39,7 +38,7 @@ from foucault_bench.models.jit import jit
 HARMONIC = "harmonic"
 ROMBERG = "romberg"
 SEQUENCES = (HARMONIC, ROMBERG)
-"""The step-number sequences (HNW I, §II.9, eqs. (9.7) and (9.8), even members): harmonic 2, 4, 6, 8, …
+"""The step-number sequences (HNW I, §II.9): harmonic 2, 4, 6, 8, …
 (Deuflhard's choice, ODEX's default ``NSEQU = 1``) and Romberg 2, 4, 8, 16, …"""
 
 
@@ -53,7 +52,7 @@ def step_numbers(kind: str, lines: int) -> tuple[int, ...]:
 
 
 def line_costs(numbers: tuple[int, ...]) -> tuple[int, ...]:
-    """A_j = 1 + n₁ + … + n_j: evaluations to compute lines 1 … j of the table (HNW I, eq. (9.25))."""
+    """A_j = 1 + n₁ + … + n_j: evaluations to compute lines 1 … j of the table (HNW I, §II.9)."""
     return tuple(1 + sum(numbers[: j + 1]) for j in range(len(numbers)))
 
 
