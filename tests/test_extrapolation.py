@@ -68,9 +68,9 @@ def test_weights_are_the_table_and_sum_to_one() -> None:
             numbers = step_numbers(kind, lines)
             weights = extrapolation_weights(numbers)
             assert math.isclose(sum(weights), 1.0, abs_tol=1e-13)
-            # a polynomial in h² of degree < lines is reproduced exactly at h = 0 (here: its value, 1)
+            # extrapolation to h = 0 removes the terms h^(2d), 0 < d < lines, of the expansion
             for degree in range(1, lines):
-                assert abs(sum(w * (1.0 / n) ** (2 * degree) for w, n in zip(weights, numbers))) < 1e-14
+                assert abs(sum(w * (1.0 / n) ** (2 * degree) for w, n in zip(weights, numbers, strict=True))) < 1e-14
 
 
 def one_step_spectral_radius(integrator, kh: float) -> float:
