@@ -40,11 +40,11 @@ import numpy as np
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from foucault_bench.integrators.extrapolation import HARMONIC, build_midpoint_line, line_costs, step_numbers
+from foucault_bench.integrators.grid_stepping import CODE_OK, STATE_SIZE, attempt_code, cut_step, write_initial_rows
 from foucault_bench.models import Model
 from foucault_bench.models.jit import jit
 from foucault_bench.models.parameters import PARAMETER_COUNT
 
-STATE_SIZE = 4
 MAX_LINES = 9
 """ODEX's default ``KM``: at most 9 lines (order ≤ 18; the target line k ≤ 8)."""
 
@@ -55,15 +55,6 @@ STABILITY_LINES = 2
 """ODEX's ``JSTAB``: the stability check runs in lines 1 and 2."""
 UROUND = 2.3e-16
 """ODEX's unit round-off."""
-CUT_SLACK = 1.01
-"""A step that would end within 1 % of a step before an output time is stretched to end on it (ODEX's last step)."""
-
-CODE_OK, CODE_TOO_SMALL_STEP, CODE_STEP_LIMIT = 0, 1, 2
-MESSAGES = {
-    CODE_TOO_SMALL_STEP: "step size below 10 ulp of t at t = {t!r} s",
-    CODE_STEP_LIMIT: "step limit of {limit} step attempts reached at t = {t!r} s",
-}
-
 ACCEPT, REJECT, RESTART = 0, 1, 2
 """Outcomes of one attempt: accepted, rejected by the error test (retry with H_k), or by a failed check (retry
 with half the step and a new f(y))."""
@@ -127,10 +118,7 @@ def build_driver(acceleration: Callable, lines: int = MAX_LINES) -> Callable:
         for i in range(STATE_SIZE):
             y[i] = y0[i]
             scal[i] = atol[i] + rtol * abs(y[i])
-        next_out = 0
-        while next_out < n_out and t_out[next_out] <= 0.0:
-            out[next_out, :] = y
-            next_out += 1
+        next_out = write_initial_rows(y, t_out, out)
         t = 0.0
         h = min(h_initial, 0.5 * hmax)
         k = max(2, min(km - 1, int(-math.log10(rtol + 1e-40) * 0.6 + 1.5)))
@@ -144,21 +132,15 @@ def build_driver(acceleration: Callable, lines: int = MAX_LINES) -> Callable:
         code = CODE_OK
         while next_out < n_out and code == CODE_OK:
             target = t_out[next_out]
-            h = min(h, target - t, hmax)
-            last = t + CUT_SLACK * h - target > 0.0
-            if last:
-                h = target - t
+            h, last = cut_step(t, min(h, hmax), target)
             ax, ay = acceleration(y[0], y[1], y[2], y[3], p)
             dz[0], dz[1], dz[2], dz[3] = y[2], y[3], ax, ay
             nfev += 1
             first_or_last = attempts == 0 or last
             while True:
-                if h < 10.0 * (np.nextafter(t, np.inf) - t):
-                    code = CODE_TOO_SMALL_STEP
-                    break
                 attempts += 1
-                if attempts > max_steps:
-                    code = CODE_STEP_LIMIT
+                code = attempt_code(t, h, attempts, max_steps)
+                if code != CODE_OK:
                     break
                 outcome = REJECT
                 kc = 0
@@ -211,10 +193,7 @@ def build_driver(acceleration: Callable, lines: int = MAX_LINES) -> Callable:
                     if k > 2 and w[k - 1] < w[k] * FAC3:
                         k -= 1
                     rejected += 1
-                    h = min(hh[k], target - t)
-                    last = t + CUT_SLACK * h - target > 0.0
-                    if last:
-                        h = target - t
+                    h, last = cut_step(t, hh[k], target)
                     reject = True
                     first_or_last = False
                     continue

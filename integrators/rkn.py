@@ -17,7 +17,7 @@ RMS over (x, y, ẋ, ẏ) of eᵢ/(atolᵢ + rtol·max(|yᵢ|, |y₁ᵢ|)); a st
 step is h·min(10, max(0.2, 0.9·err^(−1/(q+1)))) (q the estimate's order; no increase right after a rejection),
 the controller of scipy's ``solve_ivp`` (Hairer, Nørsett & Wanner I, §II.4); the first step is 0.1/k. The steps
 land on every output time (a step that would pass it, or end within 1 % of a step before it, is cut to end on
-it), as ``gbs``'s do; integrators/README.md "Runge-Kutta-Nyström methods for a velocity-dependent force" says why.
+it; ``integrators.grid_stepping``), as ``gbs``'s do.
 """
 
 from __future__ import annotations
@@ -30,18 +30,13 @@ from typing import Callable
 import numpy as np
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
+from foucault_bench.integrators.grid_stepping import CODE_OK, STATE_SIZE, attempt_code, cut_step, write_initial_rows
 from foucault_bench.models import Model
 from foucault_bench.models.jit import jit
 from foucault_bench.models.parameters import PARAMETER_COUNT
 
-STATE_SIZE = 4
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
-CUT_SLACK = 1.01
-CODE_OK, CODE_TOO_SMALL_STEP, CODE_STEP_LIMIT = 0, 1, 2
-MESSAGES = {
-    CODE_TOO_SMALL_STEP: "step size below 10 ulp of t at t = {t!r} s",
-    CODE_STEP_LIMIT: "step limit of {limit} step attempts reached at t = {t!r} s",
-}
+"""scipy's step-size controller constants (scipy/integrate/_ivp/rk.py)."""
 
 
 @dataclass(frozen=True)
@@ -115,10 +110,7 @@ def build_driver(acceleration: Callable, pair: NystromPair) -> Callable:
         y_new = np.empty(STATE_SIZE)
         for i in range(STATE_SIZE):
             y[i] = y0[i]
-        next_out = 0
-        while next_out < n_out and t_out[next_out] <= 0.0:
-            out[next_out, :] = y
-            next_out += 1
+        next_out = write_initial_rows(y, t_out, out)
         kx[0], ky[0] = acceleration(y[0], y[1], y[2], y[3], p)
         nfev = 1
         t = 0.0
@@ -130,16 +122,10 @@ def build_driver(acceleration: Callable, pair: NystromPair) -> Callable:
         code = CODE_OK
         while next_out < n_out:
             target = t_out[next_out]
-            h = min(h, target - t)
-            last = t + CUT_SLACK * h - target > 0.0
-            if last:
-                h = target - t
-            if h < 10.0 * (np.nextafter(t, np.inf) - t):
-                code = CODE_TOO_SMALL_STEP
-                break
+            h, last = cut_step(t, h, target)
             attempts += 1
-            if attempts > max_steps:
-                code = CODE_STEP_LIMIT
+            code = attempt_code(t, h, attempts, max_steps)
+            if code != CODE_OK:
                 break
             for i in range(1, s):
                 px = y[0] + c[i] * h * y[2]

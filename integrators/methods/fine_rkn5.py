@@ -17,14 +17,12 @@ Stability: explicit; the step control keeps the steps accuracy-limited at every 
 from __future__ import annotations
 
 from fractions import Fraction as F
-from typing import ClassVar, cast
+from typing import Callable, ClassVar
 
-import numpy as np
-
-from foucault_bench.integrators.adaptive import AdaptiveIntegrator, absolute_tolerance, step_budget
-from foucault_bench.integrators.base import COST_COMPILED, STATUS_FAILED, Problem, Solution
+from foucault_bench.integrators.grid_stepping import GridSteppingIntegrator
 from foucault_bench.integrators.registry import register
-from foucault_bench.integrators.rkn import CODE_OK, MESSAGES, STATE_SIZE, NystromPair, compiled_driver
+from foucault_bench.integrators.rkn import NystromPair, compiled_driver
+from foucault_bench.models import Model
 
 
 def _rows(entries: dict[int, dict[int, F]], size: int) -> tuple[tuple[F, ...], ...]:
@@ -62,39 +60,15 @@ PAIR = NystromPair(
     error_order=4,
 )
 
-INITIAL_STEP_KH = 0.1
-"""The first step in units of 1/k (the controller adapts it within a few steps)."""
-
 
 @register
-class FineRkn5(AdaptiveIntegrator):
-    """Fine's RKN 5(4) pair on the model's compiled acceleration.
-
-    Options: ``max_steps`` caps the step attempts of one run (default ``integrators.adaptive.step_budget``)."""
+class FineRkn5(GridSteppingIntegrator):
+    """Fine's RKN 5(4) pair on the model's compiled acceleration (options: ``GridSteppingIntegrator``)."""
 
     name: ClassVar[str] = "fine_rkn5"
     family: ClassVar[str] = "runge-kutta-nystrom"
     order: ClassVar[int | None] = PAIR.order
-    cost_basis: ClassVar[str] = COST_COMPILED
-    silence_native_output: ClassVar[bool] = False
     reference: ClassVar[str] = "Fine, Computing 38, 281 (1987); Hairer, Nørsett & Wanner, Solving ODEs I, §II.14"
 
-    def __init__(self, max_steps: int | None = None) -> None:
-        if max_steps is not None and max_steps < 1:
-            raise ValueError(f"max_steps must be a positive number of steps, got {max_steps!r}")
-        self.max_steps = max_steps
-
-    def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
-        params = problem.params
-        limit = self.max_steps or step_budget(params, problem.t_end_s)
-        out = np.full((problem.t_out.size, STATE_SIZE), np.nan)
-        code, t_reached, nfev, steps, rejected = compiled_driver(problem.model, PAIR)(
-            problem.initial_state, problem.parameter_vector, problem.t_out, float(cast(float, tol)),
-            absolute_tolerance(params, cast(float, tol)), INITIAL_STEP_KH / params.pendulum_frequency_rad_s, limit,
-            out)
-        solution = Solution(t=problem.t_out, y=out, nfev=int(nfev), njev=0, steps=int(steps),
-                            rejected_steps=int(rejected))
-        if code != CODE_OK:
-            solution.status = STATUS_FAILED
-            solution.message = MESSAGES[code].format(limit=limit, t=float(t_reached))
-        return solution
+    def compiled_driver(self, model: Model) -> Callable:
+        return compiled_driver(model, PAIR)
