@@ -3,8 +3,9 @@
 The explicit midpoint rule with Gragg's smoothing step over the harmonic sequence 2, 4, 6, …, extrapolated by
 Aitken-Neville, with Hairer and Wanner's order and step-size control (Hairer, Nørsett & Wanner, Solving ODEs I,
 2nd ed., §II.9; their code ODEX; Deuflhard, Numer. Math. 41, 399 (1983) for the work-per-step order choice):
-``integrators.extrapolation_driver``. Variable order 4-16 (line k of the table has order 2k; k from 2 to 8,
-plus line 9 to test convergence), chosen per step to minimise the evaluations per unit step.
+``integrators.extrapolation_driver``. Variable order 4-18 (line j of the table has order 2j; the target line k
+runs from 2 to 8, and a step is accepted in line k − 1, k or k + 1), chosen per step to minimise the
+evaluations per unit step.
 
 Tolerance mapping: rtol = tol and atol = tol × (R, R, kR, kR) (``integrators.adaptive``), ODEX's mixed
 componentwise error test.
