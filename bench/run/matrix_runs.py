@@ -13,6 +13,7 @@ from collections import Counter
 from dataclasses import dataclass
 from typing import Any
 
+from foucault_bench.bench.problems.ensemble import member_columns
 from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR, physics_identity
 from foucault_bench.bench.problems.scene import Scene
 from foucault_bench.bench.provenance import code_version, digest
@@ -44,7 +45,9 @@ class RunSpec:
     timing: TimingPolicy
     code_version: str
     declared: tuple[tuple[str, Any], ...] = ()
-    """The integrator's declared facts as (results column, value) pairs (``bench.schema.declared_facts``)."""
+    """The columns a row takes from the matrix as (results column, value) pairs: the integrator's declared facts
+    (``bench.schema.declared_facts``) and, for an ensemble member, its ensemble and swept values
+    (``bench.problems.ensemble.member_columns``)."""
 
     @property
     def step_s(self) -> float | None:
@@ -183,7 +186,7 @@ def runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timi
                     plugins=tuple(plugins),
                     timing=timing,
                     code_version=code,
-                    declared=declared,
+                    declared=declared + member_columns(scene),
                 ))
     for key in shared:
         if key not in used and integrators:

@@ -15,9 +15,10 @@ from collections import Counter
 from typing import Any
 
 from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.problems.ensemble import number_label
 from foucault_bench.bench.problems.scene import Scene, scene_name_problem
 from foucault_bench.bench.problems.scene_reader import read_scene_tables
-from foucault_bench.bench.problems.scenes import SCENES
+from foucault_bench.bench.problems.scenes import ENSEMBLES, SCENES
 from foucault_bench.bench.run.matrix_runs import MAX_RUNS, string_list
 from foucault_bench.bench.validation import is_number, short_repr, suggestion
 
@@ -27,22 +28,22 @@ def scenes(document: dict[str, Any], problem) -> list[Scene]:
     for name in string_list(document, "scenes", problem, required=False):
         if name in SCENES:
             scenes.append(SCENES[name])
+        elif name in ENSEMBLES:
+            scenes += ENSEMBLES[name]
         else:
-            problem(f"scenes: unknown scene {short_repr(name)}{suggestion(name, SCENES)}; built-in scenes: {', '.join(SCENES)}")
+            problem(f"scenes: unknown scene {short_repr(name)}{suggestion(name, [*SCENES, *ENSEMBLES])}; built-in "
+                    f"scenes: {', '.join(SCENES)}; built-in ensembles: {', '.join(ENSEMBLES)}")
     inline = document.get("scene", {})
-    scenes += read_scene_tables(inline, SCENES, dict.fromkeys(SCENES, "a built-in scene"), problem)
+    taken = {**dict.fromkeys(SCENES, "a built-in scene"), **dict.fromkeys(ENSEMBLES, "a built-in ensemble")}
+    scenes += read_scene_tables(inline, SCENES, taken, problem)
     if not document.get("scenes") and not (isinstance(inline, dict) and inline):
         problem("no scenes: list built-in ones in scenes = [...] or define [scene.NAME] tables")
     return scenes
 
 
 def azimuth_label(azimuth_deg: float) -> str:
-    """The azimuth as it appears in a variant's name: the shortest text that reads back as the same float
-    (``repr``), with a whole number's ``.0`` and an exponent's ``+`` dropped (``45``, ``45.0000001``, ``1e20``,
-    ``1e-05``). Distinct floats get distinct labels (``repr`` round-trips, and neither dropped piece can be
-    confused with another float's text), unlike ``:g``, which keeps 6 digits: 45 and 45.0000001 were both
-    ``45``."""
-    return repr(float(azimuth_deg)).removesuffix(".0").replace("e+", "e")
+    """The azimuth as it appears in a variant's name (``bench.problems.ensemble.number_label``)."""
+    return number_label(azimuth_deg)
 
 
 def release_azimuth_variants(scenes: list[Scene], azimuths: Any, problem) -> list[Scene]:
@@ -50,6 +51,9 @@ def release_azimuth_variants(scenes: list[Scene], azimuths: Any, problem) -> lis
     towards y = East), named ``SCENE-azψ`` (ψ by ``azimuth_label``); without it, the scenes as they are."""
     if azimuths is None:
         return scenes
+    for ensemble in dict.fromkeys(scene.ensemble for scene in scenes if scene.ensemble):
+        problem(f"release_azimuth_deg does not apply to the members of the ensemble {short_repr(ensemble)}: "
+                "sweep release_azimuth_deg in its ensemble table instead")
     if (not isinstance(azimuths, list) or not azimuths
             or not all(is_number(value) and math.isfinite(value) for value in azimuths)):
         problem(f"release_azimuth_deg must be a non-empty list of finite numbers (degrees), got {short_repr(azimuths)}")
