@@ -37,6 +37,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("scene_key", "TEXT", "", "hash of the scene's physics (model, every pendulum parameter and the release, duration, output grid; bench.problems.scene_key): rows of one name and two keys are two scenes; NULL for rows of an older database whose physics could not be recovered"),
     Column("ensemble", "TEXT", "", "the ensemble the scene is a member of (bench.problems.ensemble); NULL for a scene of its own"),
     Column("ensemble_member", "TEXT", "", "the member's swept fields and values, a JSON object in the ensemble's order ({\"latitude_deg\": -90.0}); NULL outside an ensemble"),
+    Column("ensemble_setting", "TEXT", "", "the setting as the matrix asked for it (kh=0.05, tol=1e-06), shared by the members of one setting (a fixed-step run's kh column holds the step taken, which depends on the member's length and output grid); NULL outside an ensemble"),
     Column("model", "TEXT", "", "model name (linear, seed_planar, spherical)"),
     Column("integrator", "TEXT", "", "integrator name (registry key)"),
     Column("family", "TEXT", "", "integrator family (colours, thresholds)"),
@@ -141,7 +142,8 @@ VERDICTS_OF_REAL_PENDULUMS_MIGRATION = (
     "reference): added as NULL columns, unknown for the old rows"
 )
 ENSEMBLE_MIGRATION = (
-    "runs lack ensemble and ensemble_member (which ensemble a row's scene is a member of, and its swept values): "
+    "runs lack ensemble, ensemble_member and ensemble_setting (which ensemble a row's scene is a member of, its "
+    "swept values and the setting asked for): "
     "added as NULL columns, right for the old rows, none of which belonged to an ensemble"
 )
 MIGRATIONS: dict[int, str] = {

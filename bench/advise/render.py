@@ -24,7 +24,8 @@ def _cost_text(record: dict[str, Any], cost: str) -> str:
 
 def _run_text(record: dict[str, Any], metric: str, cost: str) -> str:
     setting = setting_label(record.get("kh"), record.get("tol"))
-    return f"{record['integrator']} {setting}: {metric} {record[metric]:.3g}, {_cost_text(record, cost)}"
+    worst = f" (worst member {record['worst_member']})" if record.get("worst_member") else ""
+    return f"{record['integrator']} {setting}{worst}: {metric} {record[metric]:.3g}, {_cost_text(record, cost)}"
 
 
 def render_text(advice: Advice) -> str:

@@ -67,12 +67,14 @@ def member_label(member: tuple[tuple[str, float], ...]) -> str:
     return "_".join(f"{SWEPT_FIELDS[field]}{number_label(value)}" for field, value in member)
 
 
-def member_columns(scene: Scene) -> tuple[tuple[str, Any], ...]:
-    """The results columns that tag a member's rows (``bench.schema``: ``ensemble``, ``ensemble_member``, a JSON
-    object of the swept fields' values); none for a scene outside an ensemble."""
+def member_columns(scene: Scene, setting: str) -> tuple[tuple[str, Any], ...]:
+    """The results columns that tag a member's rows (``bench.schema``): ``ensemble``, ``ensemble_member`` (a JSON
+    object of the swept fields' values) and ``ensemble_setting`` (``setting``, the setting as the matrix asked
+    for it); none for a scene outside an ensemble."""
     if not scene.ensemble:
         return ()
-    return (("ensemble", scene.ensemble), ("ensemble_member", json.dumps(dict(scene.member))))
+    return (("ensemble", scene.ensemble), ("ensemble_member", json.dumps(dict(scene.member))),
+            ("ensemble_setting", setting))
 
 
 def _values(field: str, value: Any, problem: Callable[[str], None]) -> list[float]:

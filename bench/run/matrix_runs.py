@@ -178,15 +178,16 @@ def runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timi
         declared = tuple(declared_facts(integrator).items())  # once per integrator: the same for all its runs
         for scene in scenes:
             for value in sweep:
+                kh, tol = (value, None) if right == "kh" else (None, value)
                 runs.append(RunSpec(
                     scene=scene,
                     integrator=integrator.name,
-                    kh=value if right == "kh" else None,
-                    tol=value if right == "tol" else None,
+                    kh=kh,
+                    tol=tol,
                     plugins=tuple(plugins),
                     timing=timing,
                     code_version=code,
-                    declared=declared + member_columns(scene),
+                    declared=declared + member_columns(scene, setting_label(kh, tol)),
                 ))
     for key in shared:
         if key not in used and integrators:
