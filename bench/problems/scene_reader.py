@@ -9,6 +9,7 @@ default; bench/README.md "Scenes" shows it as printed by ``python -m foucault_be
 from __future__ import annotations
 
 import dataclasses
+import functools
 import inspect
 import math
 import re
@@ -126,8 +127,8 @@ def read_scene_tables(tables: Any, bases: Mapping[str, Scene], taken: Mapping[st
             problem(f"{where} must be a table of scene fields, got {short_repr(mapping)}")
             continue
         if ENSEMBLE_KEY in mapping:
-            scenes += read_members(name, mapping, lambda member, table: read_scene(member, table, bases),
-                                   lambda message, where=where: problem(f"{where}: {message}"))
+            scenes += read_members(name, mapping, functools.partial(_read_with_bases, bases=bases),
+                                   functools.partial(_prefixed, problem, where))
             continue
         try:
             scenes.append(read_scene(name, mapping, bases))
@@ -135,6 +136,14 @@ def read_scene_tables(tables: Any, bases: Mapping[str, Scene], taken: Mapping[st
             for message in error.problems:
                 problem(f"{where}: {message}")
     return scenes
+
+
+def _read_with_bases(name: str, mapping: Mapping[str, Any], *, bases: Mapping[str, Scene]) -> Scene:
+    return read_scene(name, mapping, bases)
+
+
+def _prefixed(problem: Callable[[str], None], where: str, message: str) -> None:
+    problem(f"{where}: {message}")
 
 
 def read_scene(name: str, mapping: Mapping[str, Any], bases: Mapping[str, Scene]) -> Scene:

@@ -53,7 +53,7 @@ from typing import Any
 
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.problems.scene import Scene
-from foucault_bench.bench.provenance import digest
+from foucault_bench.bench.provenance import code_version, digest
 from foucault_bench.bench.run.matrix_runs import MAX_OUTPUT_POINTS, MAX_RUNS, RunSpec, string_list
 from foucault_bench.bench.run.matrix_runs import runs as matrix_runs
 from foucault_bench.bench.run.matrix_scenes import azimuth_label, check_names, release_azimuth_variants
@@ -61,7 +61,7 @@ from foucault_bench.bench.run.matrix_scenes import scenes as scene_list
 from foucault_bench.bench.run.timing import TimingPolicy
 from foucault_bench.bench.validation import built_in_names, is_number, read_toml, run_timeout_problem, short_repr, suggestion
 
-__all__ = ["DEFAULT_RUN_TIMEOUT_S", "MAX_OUTPUT_POINTS", "MAX_RUNS", "Matrix", "RunSpec", "azimuth_label",
+__all__ = ["DEFAULT_RUN_TIMEOUT_S", "code_version", "MAX_OUTPUT_POINTS", "MAX_RUNS", "Matrix", "RunSpec", "azimuth_label",
            "built_in_matrices", "load_matrix", "parse_matrix", "with_run_timeout"]
 
 TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "release_azimuth_deg", "integrators", "kh", "tol",
