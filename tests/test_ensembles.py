@@ -288,3 +288,12 @@ def test_run_members_equals_one_by_one_runs() -> None:
             assert same(first[column], second[column]), column
     with pytest.raises(ValueError):
         run_members([matrix.runs[0], parse_matrix({**TINY, "kh": [0.1]}, source="t").runs[0]], "m")
+
+
+def test_advise_worst_refuses_a_scene_that_is_no_ensemble(tmp_path: Path) -> None:
+    done = subprocess.run([sys.executable, "-m", "foucault_bench.bench.cli", "advise", "--scene", "lab_3m",
+                           "--target", "reference_error=1e-6", "--worst", "--db", str(tmp_path / "db.sqlite")],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    (line,) = done.stderr.strip().splitlines()
+    assert "with --worst, 'lab_3m' must be an ensemble" in line and "lab_3m_azimuths" in line

@@ -47,7 +47,8 @@ def render_text(advice: Advice) -> str:
             lines.append(f"{'next:' if index == 0 else '':12s} {_run_text(record, target.metric, advice.cost)} "
                          f"({ratio:.3g}× the cost)")
     lines.append(f"model: {advice.model['text']}")
-    lines.append(f"from {advice.stored_runs} stored runs of {advice.scene.name}; {advice.meeting} meet the target")
+    lines.append(f"from {advice.stored_runs} stored runs of {advice.ensemble or advice.scene.name}; "
+                 f"{advice.meeting} meet the target")
     lines += [f"note: {note}" for note in advice.notes]
     return "\n".join(lines)
 

@@ -70,4 +70,4 @@ def advise_worst(store: ResultsStore, ensemble: str, members: tuple[Scene, ...],
     scene_rows = rows[rows["scene_key"] == scene_key(scene)]
     adequacy = latest_adequacy_rows(store, scene_rows, scene) if not scene_rows.empty else pd.DataFrame()
     return Advice(scene, target, cost, records[0] if records else None, records[1:],
-                  model_advice(adequacy, scene, target), len(rows), len(met), best, None, notes)
+                  model_advice(adequacy, scene, target), len(rows), len(met), best, None, notes, ensemble)
