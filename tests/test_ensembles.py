@@ -297,3 +297,33 @@ def test_advise_worst_refuses_a_scene_that_is_no_ensemble(tmp_path: Path) -> Non
     assert done.returncode == 2 and "Traceback" not in done.stderr
     (line,) = done.stderr.strip().splitlines()
     assert "with --worst, 'lab_3m' must be an ensemble" in line and "lab_3m_azimuths" in line
+
+
+def test_a_version_4_database_gets_the_ensemble_columns(tmp_path: Path) -> None:
+    """Schema 4 → 5: the runs table gains ensemble, ensemble_member and ensemble_setting, NULL in the old rows
+    (none of which was an ensemble member), and the file records version 5."""
+    from foucault_bench.bench.run.store import ResultsStore
+    from foucault_bench.bench.schema import COLUMNS, MIGRATIONS, SCHEMA_VERSION
+
+    added = ("ensemble", "ensemble_member", "ensemble_setting")
+    assert SCHEMA_VERSION == 5 and all(name in MIGRATIONS[4] for name in added)
+    path = tmp_path / "v4.sqlite"
+    old = [f"{column.name} {column.sql_type}" for column in COLUMNS if column.name not in added]
+    with sqlite3.connect(path) as connection:
+        connection.execute(f"CREATE TABLE runs ({', '.join(old)}, PRIMARY KEY (matrix_id, run_key))")
+        connection.execute("CREATE TABLE matrix_runs (matrix_id TEXT PRIMARY KEY, matrix_name TEXT, matrix_hash TEXT, "
+                           "status TEXT, started_utc TEXT, code_version TEXT)")
+        connection.execute("INSERT INTO matrix_runs VALUES ('old-1', 'old', 'abc', 'finished', "
+                           "'2026-01-01T00:00:00+00:00', 'v')")
+        connection.execute("INSERT INTO runs (run_key, matrix_id, scene, integrator, status, reference_error) "
+                           "VALUES ('k1', 'old-1', 'seed_2min', 'rk4', 'ok', 1.5e-7)")
+        connection.execute("PRAGMA user_version = 4")
+    connection.close()
+    with ResultsStore(path, create=False) as store:
+        assert store.schema_version == 5
+        row = store.frame().iloc[0]
+    assert all(row[name] is None or row[name] != row[name] for name in added)
+    with sqlite3.connect(path) as connection:
+        stored = {line[1] for line in connection.execute("PRAGMA table_info(runs)")}
+    connection.close()
+    assert set(added) <= stored
