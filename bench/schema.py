@@ -35,6 +35,9 @@ COLUMNS: tuple[Column, ...] = (
     Column("matrix_id", "TEXT", "", "id of the matrix run that produced the row (provenance table)"),
     Column("scene", "TEXT", "", "scene name (chosen by a matrix file: two scenes may share one)"),
     Column("scene_key", "TEXT", "", "hash of the scene's physics (model, every pendulum parameter and the release, duration, output grid; bench.problems.scene_key): rows of one name and two keys are two scenes; NULL for rows of an older database whose physics could not be recovered"),
+    Column("ensemble", "TEXT", "", "the ensemble the scene is a member of (bench.problems.ensemble); NULL for a scene of its own"),
+    Column("ensemble_member", "TEXT", "", "the member's swept fields and values, a JSON object in the ensemble's order ({\"latitude_deg\": -90.0}); NULL outside an ensemble"),
+    Column("ensemble_setting", "TEXT", "", "the setting as the matrix asked for it (kh=0.05, tol=1e-06), shared by the members of one setting (a fixed-step run's kh column holds the step taken, which depends on the member's length and output grid); NULL outside an ensemble"),
     Column("model", "TEXT", "", "model name (linear, seed_planar, spherical)"),
     Column("integrator", "TEXT", "", "integrator name (registry key)"),
     Column("family", "TEXT", "", "integrator family (colours, thresholds)"),
@@ -119,7 +122,7 @@ DECLARED_FACTS: dict[str, str] = {
 }
 """Results column → the ``integrators.Integrator`` class attribute it stores."""
 
-SCHEMA_VERSION = 4
+SCHEMA_VERSION = 5
 """Version of ``COLUMNS`` (stored as the database's ``PRAGMA user_version``)."""
 SCENE_KEY_MIGRATION = (
     "runs and adequacy rows lack scene_key: added, and filled for the old rows of a built-in scene (or its "
@@ -138,14 +141,21 @@ VERDICTS_OF_REAL_PENDULUMS_MIGRATION = (
     "canonical_angular_momentum_ref_error and semi_minor_axis_ref_error (the swing's ellipse against the "
     "reference): added as NULL columns, unknown for the old rows"
 )
+ENSEMBLE_MIGRATION = (
+    "runs lack ensemble, ensemble_member and ensemble_setting (which ensemble a row's scene is a member of, its "
+    "swept values and the setting asked for): "
+    "added as NULL columns, right for the old rows, none of which belonged to an ensemble"
+)
 MIGRATIONS: dict[int, str] = {
     1: "runs lack the declared integrator facts (declared_order, stages, adaptive, stability_limit_kh) and the "
        "precession errors in rad/s and relative to Ω_E (precession_rate_error_rad_s, _earth, "
        "precession_rate_ref_error_rad_s, _earth): added as NULL columns, unknown for the old rows; and, as for "
        "version 2, " + SCENE_KEY_MIGRATION + "; and " + VERDICTS_OF_REAL_PENDULUMS_MIGRATION + "; and "
-       + TIMING_MIGRATION,
-    2: SCENE_KEY_MIGRATION + "; and " + VERDICTS_OF_REAL_PENDULUMS_MIGRATION + "; and " + TIMING_MIGRATION,
-    3: VERDICTS_OF_REAL_PENDULUMS_MIGRATION + "; and " + TIMING_MIGRATION,
+       + TIMING_MIGRATION + "; and " + ENSEMBLE_MIGRATION,
+    2: SCENE_KEY_MIGRATION + "; and " + VERDICTS_OF_REAL_PENDULUMS_MIGRATION + "; and " + TIMING_MIGRATION
+       + "; and " + ENSEMBLE_MIGRATION,
+    3: VERDICTS_OF_REAL_PENDULUMS_MIGRATION + "; and " + TIMING_MIGRATION + "; and " + ENSEMBLE_MIGRATION,
+    4: ENSEMBLE_MIGRATION,
 }
 """Older schema version → what a database written under it lacks (the store adds the missing columns)."""
 

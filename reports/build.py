@@ -49,7 +49,7 @@ from foucault_bench.bench.verdicts.pareto import (
 from foucault_bench.integrators import REGISTRY, STATUS_OK
 from foucault_bench.integrators.base import COST_COMPILED, COST_PYTHON_DRIVEN
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
-from foucault_bench.reports import charts, halls, interactive, tables
+from foucault_bench.reports import charts, ensembles, halls, interactive, tables
 from foucault_bench.reports.document import (
     Block,
     Figure,
@@ -647,6 +647,7 @@ def build_report(inputs: ReportInputs, folder: Path, title: str = "foucault-benc
     _studies(builder, inputs.studies)
     _adequacy(builder, inputs.adequacy)
     halls.add_section(builder, inputs.runs)
+    ensembles.add_section(builder, inputs.runs, file_stem)
     if inputs.include_seed:
         builder.later("seed section", partial(seed_blocks, folder, "seed"), long=True)
     _all_runs(builder, inputs.runs)

@@ -187,7 +187,7 @@ def test_azimuth_variants_have_distinct_names_that_read_back_as_their_azimuths()
 def test_two_scenes_of_one_name_are_refused(monkeypatch):
     """The guard behind the labels: with the old ``:g`` label the collision is one line, exit 2, not two
     scenes merged."""
-    import foucault_bench.bench.run.matrix as matrix_module
+    import foucault_bench.bench.run.matrix_scenes as matrix_module
 
     monkeypatch.setattr(matrix_module, "azimuth_label", lambda azimuth: f"{azimuth:g}")
     with pytest.raises(InputError) as caught:

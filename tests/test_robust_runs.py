@@ -256,7 +256,7 @@ def test_validation_of_a_long_sweep_finishes(tmp_path):
 def test_a_matrix_of_more_than_max_runs_is_refused_before_its_entries_are_read(monkeypatch):
     """A million distinct kh values (the old code validated them for 14 s and 1 GB, then planned a million
     runs): one line giving the count, and no entry is looked at (the per-entry check is never called)."""
-    import foucault_bench.bench.run.matrix as matrix_module
+    import foucault_bench.bench.run.matrix_runs as matrix_module
 
     def never(*_):
         raise AssertionError("an entry was validated")

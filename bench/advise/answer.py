@@ -38,6 +38,8 @@ class Advice:
     best_reached: dict[str, Any] | None = None
     search: dict[str, Any] | None = None
     notes: list[str] = field(default_factory=list)
+    ensemble: str = ""
+    """With ``--worst``: the ensemble answered for (``scene`` is then its recommended worst member)."""
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -46,6 +48,7 @@ class Advice:
             "cost_column": self.cost, "recommended": self.recommended, "next": self.alternatives,
             "model_advice": self.model, "stored_runs": self.stored_runs, "runs_meeting_target": self.meeting,
             "best_reached": self.best_reached, "search": self.search, "notes": self.notes,
+            **({"ensemble": self.ensemble} if self.ensemble else {}),
         }
 
 

@@ -24,7 +24,8 @@ def _cost_text(record: dict[str, Any], cost: str) -> str:
 
 def _run_text(record: dict[str, Any], metric: str, cost: str) -> str:
     setting = setting_label(record.get("kh"), record.get("tol"))
-    return f"{record['integrator']} {setting}: {metric} {record[metric]:.3g}, {_cost_text(record, cost)}"
+    worst = f" (worst member {record['worst_member']})" if record.get("worst_member") else ""
+    return f"{record['integrator']} {setting}{worst}: {metric} {record[metric]:.3g}, {_cost_text(record, cost)}"
 
 
 def render_text(advice: Advice) -> str:
@@ -46,7 +47,8 @@ def render_text(advice: Advice) -> str:
             lines.append(f"{'next:' if index == 0 else '':12s} {_run_text(record, target.metric, advice.cost)} "
                          f"({ratio:.3g}× the cost)")
     lines.append(f"model: {advice.model['text']}")
-    lines.append(f"from {advice.stored_runs} stored runs of {advice.scene.name}; {advice.meeting} meet the target")
+    lines.append(f"from {advice.stored_runs} stored runs of {advice.ensemble or advice.scene.name}; "
+                 f"{advice.meeting} meet the target")
     lines += [f"note: {note}" for note in advice.notes]
     return "\n".join(lines)
 

@@ -59,7 +59,18 @@ def main(args: argparse.Namespace) -> int:
         matrix_id = store.resolve_matrix_id(args.matrix_id)
         print(f"\nmatrix run {matrix_id}:")
         print(summary_text(store.records(matrix_id)))
+        _print_ensembles(store.frame(matrix_id))
     return 0
+
+
+def _print_ensembles(rows) -> None:
+    """The ensemble summary of the matrix run's member rows, per metric (nothing without members)."""
+    from foucault_bench.bench.ensembles.summary import SUMMARY_METRICS, summary_text as ensemble_text
+
+    for metric in SUMMARY_METRICS:
+        text = ensemble_text(rows, metric)
+        if text:
+            print(f"\n{text}")
 
 
 def _compare(store, first: str, second: str) -> int:

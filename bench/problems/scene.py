@@ -62,6 +62,8 @@ class Scene:
         why_model: why ``model`` is enough for what the scene measures.
         source: where the numbers come from.
         assumptions: what the scene assumes where the sources say nothing (amplitude, duration, …).
+        ensemble: the name of the ensemble the scene is a member of (``bench.problems.ensemble``); "" if none.
+        member: the member's swept fields and their values, in the ensemble's order; () outside an ensemble.
     """
 
     name: str
@@ -73,6 +75,8 @@ class Scene:
     why_model: str
     source: str
     assumptions: str = ""
+    ensemble: str = ""
+    member: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
         problems = grid_problems(self.params.small_swing_period_s, self.duration_s, self.output_interval_s)

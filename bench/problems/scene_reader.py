@@ -9,6 +9,7 @@ default; bench/README.md "Scenes" shows it as printed by ``python -m foucault_be
 from __future__ import annotations
 
 import dataclasses
+import functools
 import inspect
 import math
 import re
@@ -16,6 +17,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Mapping
 
 from foucault_bench.bench.errors import InputError
+from foucault_bench.bench.problems.ensemble import ENSEMBLE_KEY, SWEPT_FIELDS, read_members
 from foucault_bench.bench.problems.scene import Scene, grid_problems, scene_name_problem
 from foucault_bench.bench.validation import finite_number, is_number, short_repr, suggestion
 from foucault_bench.models import MODELS, PendulumParameters
@@ -86,6 +88,9 @@ SCENE_KEY_TABLE: tuple[SceneKey, ...] = (
     SceneKey("source", "where the numbers come from", default="inline scene of a matrix file"),
     SceneKey("assumptions", "what the scene assumes where the sources say nothing (amplitude, duration, release)",
              default=""),
+    SceneKey(ENSEMBLE_KEY, f"a table of sweeps over {', '.join(SWEPT_FIELDS)} (lists or {{start, stop, step}} "
+             "ranges): the table then gives one scene per combination, NAME.LABEL (bench.problems.ensemble)",
+             default_note="none: one scene"),
 )
 """Every key a scene table may hold, in the order bench/README.md lists them."""
 
@@ -121,12 +126,24 @@ def read_scene_tables(tables: Any, bases: Mapping[str, Scene], taken: Mapping[st
         if not isinstance(mapping, dict):
             problem(f"{where} must be a table of scene fields, got {short_repr(mapping)}")
             continue
+        if ENSEMBLE_KEY in mapping:
+            scenes += read_members(name, mapping, functools.partial(_read_with_bases, bases=bases),
+                                   functools.partial(_prefixed, problem, where))
+            continue
         try:
             scenes.append(read_scene(name, mapping, bases))
         except InputError as error:
             for message in error.problems:
                 problem(f"{where}: {message}")
     return scenes
+
+
+def _read_with_bases(name: str, mapping: Mapping[str, Any], *, bases: Mapping[str, Scene]) -> Scene:
+    return read_scene(name, mapping, bases)
+
+
+def _prefixed(problem: Callable[[str], None], where: str, message: str) -> None:
+    problem(f"{where}: {message}")
 
 
 def read_scene(name: str, mapping: Mapping[str, Any], bases: Mapping[str, Scene]) -> Scene:
@@ -138,6 +155,8 @@ def read_scene(name: str, mapping: Mapping[str, Any], bases: Mapping[str, Scene]
     problems: list[str] = []
     if not isinstance(mapping, Mapping):
         raise InputError([f"a scene must be a table of fields, got {short_repr(mapping)}"])
+    if ENSEMBLE_KEY in mapping:
+        problems.append(f"{ENSEMBLE_KEY}: a table with sweeps is several scenes, read with read_scene_tables")
     for key in mapping:
         if key not in SCENE_KEYS:
             problems.append(f"unknown key {short_repr(key)}{suggestion(str(key), SCENE_KEYS)}; "

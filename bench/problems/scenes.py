@@ -4,7 +4,8 @@ A built-in scene file holds ``[scene.NAME]`` tables in the syntax of a matrix fi
 same reader (``bench.problems.scene_reader.read_scene_tables``) with the same checks and messages; a table may
 start from a scene of an earlier file with ``base = "NAME"``, and a name may be defined in one file only.
 ``bench/scenes/builtin.toml`` holds the real pendulums, an Airy scene and the seed note's own setting, with how
-they were chosen; a new file in the folder adds its scenes to ``SCENES``. ``scene_from_mapping`` reads a matrix's
+they were chosen; ``bench/scenes/ensembles.toml`` the built-in ensembles (``ENSEMBLES``: a table with sweeps,
+whose members are scenes); a new file in the folder adds its scenes to ``SCENES``. ``scene_from_mapping`` reads a matrix's
 inline scene, which may start from any built-in one.
 
 The scene type and the reader live in ``bench.problems.scene`` and ``bench.problems.scene_reader``; their names
@@ -30,7 +31,7 @@ from foucault_bench.bench.validation import read_toml, short_repr
 
 __all__ = [
     "MAX_OUTPUT_POINTS", "MAX_SCENE_NAME_LENGTH", "MIN_OUTPUT_INTERVALS_PER_PERIOD", "REQUIRED_KEYS",
-    "SCENES", "SCENE_DIRECTORY", "SCENE_KEYS", "SCENE_KEY_TABLE", "SCENE_NAME_PATTERN", "SEED_EARTH_RATE_RAD_S", "Scene",
+    "ENSEMBLES", "SCENES", "SCENE_DIRECTORY", "SCENE_KEYS", "SCENE_KEY_TABLE", "SCENE_NAME_PATTERN", "SEED_EARTH_RATE_RAD_S", "Scene",
     "grid_problems", "load_scene_files", "physical_limit_problems", "scene_from_mapping",
     "scene_name_problem",
 ]
@@ -66,6 +67,7 @@ def load_scene_files(paths: Iterable[Path]) -> dict[str, Scene]:
             raise InputError(problems)
         scenes.update((scene.name, scene) for scene in loaded)
         taken.update(dict.fromkeys((scene.name for scene in loaded), f"a scene of {path.name}"))
+        taken.update(dict.fromkeys((scene.ensemble for scene in loaded if scene.ensemble), f"an ensemble of {path.name}"))
     return scenes
 
 
@@ -73,8 +75,13 @@ def _add_problem(problems: list[str], source: str, message: str) -> None:
     problems.append(f"{source}: {message}")
 
 
-SCENES: dict[str, Scene] = load_scene_files(sorted(SCENE_DIRECTORY.glob("*.toml")))
+_ALL_SCENES = load_scene_files(sorted(SCENE_DIRECTORY.glob("*.toml")))
+SCENES: dict[str, Scene] = {name: scene for name, scene in _ALL_SCENES.items() if not scene.ensemble}
 """The built-in scenes by name (the files in name order, each in its own order: the order reports list them)."""
+ENSEMBLES: dict[str, tuple[Scene, ...]] = {
+    name: tuple(scene for scene in _ALL_SCENES.values() if scene.ensemble == name)
+    for name in dict.fromkeys(scene.ensemble for scene in _ALL_SCENES.values() if scene.ensemble)}
+"""The built-in ensembles by name (``bench/scenes/ensembles.toml``; ``bench.problems.ensemble``): their members."""
 
 
 def scene_from_mapping(name: str, mapping: Mapping[str, Any]) -> Scene:
