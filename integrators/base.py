@@ -229,7 +229,7 @@ class Integrator(ABC):
                 solution = self._solve(problem, step_s=step_s, tol=tol, monitor=monitor)
         except Exception as exc:  # any library or numerical failure becomes a row, not a crash
             return Solution.failure(problem.t_out, f"{type(exc).__name__}: {exc}")
-        if solution.status == STATUS_OK and not np.all(np.isfinite(solution.y)):
+        if solution.status == STATUS_OK and not np.isfinite(solution.y).all():
             solution.status = STATUS_DIVERGED
             solution.message = solution.message or "state became non-finite"
         if solution.nfev is None and self.stages is not None and solution.steps is not None:
