@@ -229,6 +229,12 @@ class Integrator(ABC):
                 solution = self._solve(problem, step_s=step_s, tol=tol, monitor=monitor)
         except Exception as exc:  # any library or numerical failure becomes a row, not a crash
             return Solution.failure(problem.t_out, f"{type(exc).__name__}: {exc}")
+        return self.finish(solution, step_s=step_s, tol=tol)
+
+    def finish(self, solution: Solution, *, step_s: float | None, tol: float | None) -> Solution:
+        """What ``solve`` adds to ``_solve``'s solution (also applied to each member of a batch,
+        ``integrators.batch``): a non-finite state marks it diverged, ``nfev`` from the declared stages when
+        the scheme did not count it, the step and tolerance of the setting."""
         if solution.status == STATUS_OK and not np.isfinite(solution.y).all():
             solution.status = STATUS_DIVERGED
             solution.message = solution.message or "state became non-finite"

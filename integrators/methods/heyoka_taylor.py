@@ -188,6 +188,25 @@ def prepared_run(problem: Problem, precision: str, tol: float, monitor: bool, ma
     return run
 
 
+def taylor_solution(problem: Problem, states, steps: int, order: int, heyoka_tol: float, outcome, time_reached,
+                    budget: int) -> Solution:
+    """The ``Solution`` of one heyoka propagation (also one lane of a batch, ``integrators.batch_heyoka``): the
+    grid states reached (NaN after a failure), the counters and the outcome as status and message."""
+    import heyoka
+
+    y = np.asarray(states, dtype=np.float64)  # a new array: heyoka returns it for this call
+    t_out = problem.t_out
+    if len(y) < t_out.size:  # the rows reached, fewer after a failure; NaN after
+        y = np.vstack([y, np.full((t_out.size - len(y), 4), np.nan)])
+    solution = Solution(t=t_out, y=y, nfev=steps, njev=0, steps=steps, rejected_steps=0,
+                        extra={"taylor_order": order, "heyoka_tol": heyoka_tol})
+    if outcome != heyoka.taylor_outcome.time_limit:
+        solution.status = STATUS_DIVERGED if outcome == heyoka.taylor_outcome.err_nf_state else STATUS_FAILED
+        solution.message = (f"heyoka outcome {outcome.name} at t = {float(time_reached):.6g} s after "
+                            f"{steps} steps of non-zero size (iteration limit {budget})")
+    return solution
+
+
 @register
 class HeyokaTaylor(AdaptiveIntegrator):
     """Adaptive Taylor method of heyoka in double precision (order from tol, 20 at machine epsilon).
@@ -232,17 +251,8 @@ class HeyokaTaylor(AdaptiveIntegrator):
         if outcome == time_limit:
             outcome, _, _, grid_steps, _, states = integrator.propagate_grid(run.grid, max_steps=budget - steps)
             steps += grid_steps
-        y = np.asarray(states, dtype=np.float64)  # a new array: heyoka returns it for this call
-        t_out = problem.t_out
-        if len(y) < t_out.size:  # the rows reached, fewer after a failure; NaN after
-            y = np.vstack([y, np.full((t_out.size - len(y), 4), np.nan)])
-
-        solution = Solution(t=t_out, y=y, nfev=steps, njev=0, steps=steps, rejected_steps=0,
-                            extra={"taylor_order": run.order, "heyoka_tol": run.heyoka_tol})
-        if outcome != time_limit:
-            solution.status = STATUS_DIVERGED if outcome == heyoka.taylor_outcome.err_nf_state else STATUS_FAILED
-            solution.message = (f"heyoka outcome {outcome.name} at t = {float(integrator.time):.6g} s after "
-                                f"{steps} steps of non-zero size (iteration limit {budget})")
+        solution = taylor_solution(problem, states, steps, run.order, run.heyoka_tol, outcome,
+                                   integrator.time, budget)
         if monitor:
             recorded = np.array(integrator.nt_events[0].callback.rows, dtype=np.float64).reshape(-1, 3)
             solution.streamed = StreamedMetrics(
