@@ -78,6 +78,14 @@ REFERENCE_TOLERANCE = 1.0e-33
 """``tol`` of the quadruple-precision reference runs (real128 carries about 34 significant digits)."""
 
 
+@functools.lru_cache(maxsize=1)
+def _outcomes():
+    """``heyoka.taylor_outcome`` (imported on first use: importing heyoka costs a worker about 0.7 s)."""
+    import heyoka
+
+    return heyoka.taylor_outcome
+
+
 @functools.lru_cache(maxsize=None)
 def _fp_type(precision: str) -> type:
     import heyoka
@@ -192,16 +200,15 @@ def taylor_solution(problem: Problem, states, steps: int, order: int, heyoka_tol
                     budget: int) -> Solution:
     """The ``Solution`` of one heyoka propagation (also one lane of a batch, ``integrators.batch_heyoka``): the
     grid states reached (NaN after a failure), the counters and the outcome as status and message."""
-    import heyoka
-
     y = np.asarray(states, dtype=np.float64)  # a new array: heyoka returns it for this call
     t_out = problem.t_out
     if len(y) < t_out.size:  # the rows reached, fewer after a failure; NaN after
         y = np.vstack([y, np.full((t_out.size - len(y), 4), np.nan)])
     solution = Solution(t=t_out, y=y, nfev=steps, njev=0, steps=steps, rejected_steps=0,
                         extra={"taylor_order": order, "heyoka_tol": heyoka_tol})
-    if outcome != heyoka.taylor_outcome.time_limit:
-        solution.status = STATUS_DIVERGED if outcome == heyoka.taylor_outcome.err_nf_state else STATUS_FAILED
+    outcomes = _outcomes()
+    if outcome != outcomes.time_limit:
+        solution.status = STATUS_DIVERGED if outcome == outcomes.err_nf_state else STATUS_FAILED
         solution.message = (f"heyoka outcome {outcome.name} at t = {float(time_reached):.6g} s after "
                             f"{steps} steps of non-zero size (iteration limit {budget})")
     return solution
@@ -231,8 +238,6 @@ class HeyokaTaylor(AdaptiveIntegrator):
         self.max_steps = max_steps
 
     def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
-        import heyoka
-
         run = prepared_run(problem, self.precision, cast(float, tol), monitor, self.max_steps)
         integrator = run.integrator
         integrator.time = run.fp_zero
@@ -243,7 +248,7 @@ class HeyokaTaylor(AdaptiveIntegrator):
             integrator.nt_events[0].callback.rows.clear()
         budget = run.budget
 
-        time_limit = heyoka.taylor_outcome.time_limit
+        time_limit = _outcomes().time_limit
         states = _NO_STATES
         outcome, steps = time_limit, 0
         if run.starts_late:  # propagate_grid starts at the integrator's time
