@@ -228,6 +228,7 @@ class HeyokaTaylor(AdaptiveIntegrator):
     precision: ClassVar[str] = "double"
     cost_basis: ClassVar[str] = COST_COMPILED  # LLVM-compiled Taylor steps; one Python call per solve
     silence_native_output: ClassVar[bool] = False  # reports through the propagate outcome, prints nothing
+    reports_non_finite_states: ClassVar[bool] = True  # checked after every step: outcome err_nf_state
     reference: ClassVar[str] = (
         "Biscani & Izzo, MNRAS 504, 2614 (2021); Jorba & Zou, Exp. Math. 14, 99 (2005); heyoka 7.13 docs"
     )
