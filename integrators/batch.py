@@ -117,7 +117,7 @@ def fixed_step_arrays(integrator: FixedStepIntegrator, problems: Sequence[Proble
                       monitor: bool) -> tuple:
     """The member loop's arguments: states, parameters, steps, step counts, strides, output, monitor flag,
     turning-point buffers, divergence radii and the results array (members × 5)."""
-    layout = [integrator.steps_for(problem, cast(float, step)) for problem, step in zip(problems, steps, strict=True)]
+    layout = [integrator.steps_for(problem, step) for problem, step in zip(problems, steps, strict=True)]
     states0, parameter_vectors = stacked(problems)
     capacity = max(integrator.turning_capacity(problem) for problem in problems) if monitor else 0
     return (states0, parameter_vectors, np.array([h for _, h, _ in layout]),

@@ -56,7 +56,7 @@ def test_fixed_step_batch_is_bitwise_the_members_alone(name: str, kh: float, mon
         problems = [scene.problem() for scene in scenes]
         steps = [kh / scene.params.pendulum_frequency_rad_s for scene in scenes]
         batch = solve_batch(integrator, problems, step_s=steps, monitor=monitor)
-        alone = [integrator.solve(problem, step_s=step, monitor=monitor) for problem, step in zip(problems, steps)]
+        alone = [integrator.solve(problem, step_s=step, monitor=monitor) for problem, step in zip(problems, steps, strict=True)]
         assert all(same(b, a) for b, a in zip(batch, alone, strict=True))
         assert len({b.y.tobytes() for b in batch}) == len(batch)  # the members differ: the check has teeth
 
@@ -104,7 +104,7 @@ def test_heyoka_with_events_and_quad_run_member_by_member() -> None:
     for name, tol, monitor in (("heyoka_taylor", 1e-10, True), ("heyoka_taylor_quad", 1e-20, False)):
         integrator = get_integrator(name)
         batch = solve_batch(integrator, problems, tol=tol, monitor=monitor)
-        assert all(same(b, integrator.solve(p, tol=tol, monitor=monitor)) for b, p in zip(batch, problems))
+        assert all(same(b, integrator.solve(p, tol=tol, monitor=monitor)) for b, p in zip(batch, problems, strict=True))
 
 
 def test_a_malformed_batch_is_refused() -> None:

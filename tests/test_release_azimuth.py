@@ -1,5 +1,5 @@
-"""The two release-azimuth terms of the spherical pendulum's measured precession rate (models/README.md "Released
-from rest on the rotating Earth"), checked against quadruple-precision references over the release azimuth ψ:
+"""The two release-azimuth terms of the spherical pendulum's measured precession rate (models/README.md "The release
+azimuth"), checked against quadruple-precision references over the release azimuth ψ:
 
     rate / (−Ω_E sin φ) = 1 − (3/8)θ₀² − ¼θ₀³ cot φ cos ψ − (3/64)θ₀² (Ω_E T) cos φ cot φ sin 2ψ + …
 

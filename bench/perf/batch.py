@@ -25,12 +25,13 @@ import tempfile
 import time
 from dataclasses import replace
 from functools import partial
+from typing import cast
 
 import numpy as np
 
 from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio
 from foucault_bench.bench.problems.scenes import SCENES, Scene
-from foucault_bench.integrators import get_integrator
+from foucault_bench.integrators import FixedStepIntegrator, get_integrator
 from foucault_bench.integrators.batch import fixed_step_arrays, fixed_step_member_loop, solve_batch
 
 SECTION = "batch"
@@ -55,7 +56,7 @@ def rk4_ensemble(quick: bool) -> tuple[list[Row], list[list[str]]]:
     count = RK4_MEMBERS // 10 if quick else RK4_MEMBERS
     scene = SCENES["pantheon"]
     problems = [member.problem() for member in azimuth_members(scene, count)]
-    integrator = get_integrator("rk4")
+    integrator = cast(FixedStepIntegrator, get_integrator("rk4"))
     step_s = KH / scene.params.pendulum_frequency_rad_s
     arguments = fixed_step_arrays(integrator, problems, [step_s] * count, False)
     member_loop = fixed_step_member_loop(integrator.kernel(problems[0].model))

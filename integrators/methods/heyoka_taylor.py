@@ -184,7 +184,7 @@ def prepared_run(problem: Problem, precision: str, tol: float, monitor: bool, ma
     model = problem.model
     heyoka_tol = heyoka_tolerance(problem.params, tol)
     integrator = working_integrator(model, precision, heyoka_tol, monitor)
-    grid = np.asarray(problem.t_out, dtype=fp_type)
+    grid: np.ndarray = np.asarray(problem.t_out, dtype=fp_type)
     run = _thread_copies.last_run = PreparedRun(
         problem=problem, key=key, integrator=integrator, heyoka_tol=heyoka_tol,
         budget=max_steps or step_budget(problem.params, problem.t_end_s), order=integrator.order,
