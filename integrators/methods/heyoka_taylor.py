@@ -46,7 +46,7 @@ the reset makes repeated runs bitwise identical (``tests/test_adaptive.py``). Wh
 needs besides (heyoka's ε, the step budget, the grid, release state and parameters in heyoka's floating-point
 type, views of the integrator's state and parameter buffers) is prepared once and kept for the thread's last
 problem (``prepared_run``), so a timed repeat of the same problem does no Python work beyond the reset and the
-``Solution``: the adapter costs about 2 µs over bare heyoka's reset-and-propagate (``foucault-bench perf
+``Solution``: the adapter costs about 3.5 µs over bare heyoka's reset-and-propagate (``foucault-bench perf
 --only adapters``, bench/PERF.md). heyoka 7.13 also keeps compiled
 code on disk (``heyoka.llvm_state.get_diskcache_enabled()`` is true by default, directory
 ``heyoka.llvm_state.get_diskcache_path()``, by default ~/.cache/heyoka, 20 GiB limit): a new process loads
