@@ -87,24 +87,41 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
         self.max_steps = max_steps
 
     def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
-        params = problem.params
-        limit = self.max_steps or step_budget(params, problem.t_end_s)
+        limit = self.step_limit(problem)
         out = np.full((problem.t_out.size, STATE_SIZE), np.nan)
-        periods = problem.t_end_s / params.small_swing_period_s
-        events = np.empty((int(2.2 * periods) + 16 if monitor else 0, 3))
-        k = np.empty((self.tableau.stages + 1 + self.tableau.extra_stages, STATE_SIZE))
+        events = np.empty((self.event_capacity(problem) if monitor else 0, 3))
         code, t_reached, nfev, steps, rejected, n_events = compiled_driver(problem.model, self.tableau)(
             problem.initial_state, problem.parameter_vector, problem.t_out, float(cast(float, tol)),
-            absolute_tolerance(params, cast(float, tol)), limit, monitor, out, events, k,
+            absolute_tolerance(problem.params, cast(float, tol)), limit, monitor, out, events, self.stage_buffer(),
         )
-        solution = Solution(t=problem.t_out, y=out, nfev=int(nfev), njev=0, steps=int(steps),
-                            rejected_steps=int(rejected))
+        return self.driver_solution(problem, out, limit, int(code), float(t_reached), int(nfev), int(steps),
+                                    int(rejected), events[:n_events] if monitor else None)
+
+    def step_limit(self, problem: Problem) -> int:
+        """Most accepted steps of a run: ``max_steps`` or ``integrators.adaptive.step_budget``."""
+        return self.max_steps or step_budget(problem.params, problem.t_end_s)
+
+    @staticmethod
+    def event_capacity(problem: Problem) -> int:
+        """Rows of the turning-point buffer: 2.2 per small-swing period (a swing has 2) and 16 more."""
+        return int(2.2 * problem.t_end_s / problem.params.small_swing_period_s) + 16
+
+    def stage_buffer(self) -> np.ndarray:
+        """The driver's stage array (the stages, the first-same-as-last one and the dense output's extras)."""
+        return np.empty((self.tableau.stages + 1 + self.tableau.extra_stages, STATE_SIZE))
+
+    @staticmethod
+    def driver_solution(problem: Problem, out: np.ndarray, limit: int, code: int, t_reached: float, nfev: int,
+                        steps: int, rejected: int, events: np.ndarray | None) -> Solution:
+        """The ``Solution`` of one driver run from what it wrote and returned (``events``: the turning points
+        found, ``None`` without ``monitor``)."""
+        solution = Solution(t=problem.t_out, y=out, nfev=nfev, njev=0, steps=steps, rejected_steps=rejected)
         if code != CODE_OK:
             solution.status = STATUS_FAILED
-            solution.message = MESSAGES[code].format(limit=limit, t=float(t_reached))
-        if monitor:
+            solution.message = MESSAGES[code].format(limit=limit, t=t_reached)
+        if events is not None:
             solution.streamed = StreamedMetrics(turning_points=turning_points(
-                problem, events[:n_events, 0], events[:n_events, 1], events[:n_events, 2]))
+                problem, events[:, 0], events[:, 1], events[:, 2]))
         return solution
 
 

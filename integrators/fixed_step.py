@@ -214,17 +214,36 @@ class FixedStepIntegrator(Integrator):
         uniform_output_stride(problem.t_out, cast(float, step_s))  # validate_setting checked it first
 
     def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
-        stride, h = uniform_output_stride(problem.t_out, cast(float, step_s))
-        n_out = problem.t_out.size
-        n_steps = stride * (n_out - 1)
-        out = np.full((n_out, 4), np.nan)
-        periods = problem.t_end_s / problem.params.small_swing_period_s
-        turning = np.empty((int(2.2 * periods) + 16 if monitor else 0, 3))
-        radius_bound = DIVERGENCE_RADIUS_FACTOR * problem.params.length_m
+        stride, h, n_steps = self.steps_for(problem, cast(float, step_s))
+        out = np.full((problem.t_out.size, 4), np.nan)
+        turning = np.empty((self.turning_capacity(problem) if monitor else 0, 3))
         status, steps_done, n_turning, max_rel, slope = self.kernel(problem.model)(
             problem.initial_state, problem.parameter_vector, h, n_steps, stride, out, monitor, turning,
-            radius_bound,
+            self.radius_bound_m(problem),
         )
+        return self.kernel_solution(problem, out, h, n_steps, int(status), int(steps_done),
+                                    turning[:n_turning] if monitor else None, max_rel, slope)
+
+    @staticmethod
+    def steps_for(problem: Problem, step_s: float) -> tuple[int, float, int]:
+        """Steps per output interval, the effective step (s) and the total number of steps of a run."""
+        stride, h = uniform_output_stride(problem.t_out, step_s)
+        return stride, h, stride * (problem.t_out.size - 1)
+
+    @staticmethod
+    def turning_capacity(problem: Problem) -> int:
+        """Rows of the turning-point buffer: 2.2 per small-swing period (a swing has 2) and 16 more."""
+        return int(2.2 * problem.t_end_s / problem.params.small_swing_period_s) + 16
+
+    @staticmethod
+    def radius_bound_m(problem: Problem) -> float:
+        """The distance from the vertical beyond which a run is declared diverged."""
+        return DIVERGENCE_RADIUS_FACTOR * problem.params.length_m
+
+    def kernel_solution(self, problem: Problem, out: np.ndarray, h: float, n_steps: int, status: int,
+                        steps_done: int, turning: np.ndarray | None, max_rel: float, slope: float) -> Solution:
+        """The ``Solution`` of one kernel run from what the kernel wrote and returned (``turning``: the rows
+        found, ``None`` without ``monitor``)."""
         solution = Solution(t=problem.t_out, y=out, steps=steps_done, step_size_s=h,
                             nfev=self.counted_nfev(problem.model, steps_done))
         if status == STATUS_CODE_DIVERGED:
@@ -233,8 +252,8 @@ class FixedStepIntegrator(Integrator):
                 f"diverged after {steps_done} of {n_steps} steps (t = {steps_done * h:.6g} s): state non-finite "
                 f"or farther than {DIVERGENCE_RADIUS_FACTOR:g} L from the vertical"
             )
-        if monitor:
+        if turning is not None:
             solution.streamed = StreamedMetrics(
-                energy_max_rel_error=max_rel, energy_drift_per_s=slope, turning_points=turning[:n_turning].copy()
+                energy_max_rel_error=max_rel, energy_drift_per_s=slope, turning_points=turning.copy()
             )
         return solution

@@ -12,6 +12,8 @@ Sections (one module each; each returns target rows and a detail table):
 * ``compile`` (``compile_cache``): cold and warm compile time per integrator;
 * ``memory``: peak RSS of 10⁷- and 10⁸-step runs with streaming verdicts;
 * ``sweeps``: a latitude sweep with heyoka's batch mode and ensembles against a scalar loop;
+* ``batch``: an ensemble's members as one batch (``integrators.batch``) against one by one: a 1000-member RK4
+  ensemble against its members' loop bodies, and references and heyoka runs in batch mode;
 * ``matrices``: wall time of the quick and default matrices, cold and warm (compile once);
 * ``limits``: each integrator family against its own limit (compiled CVODE per right-hand-side evaluation
   against scikit-sundae's, ``bench.perf.cvode``; the compiled Runge-Kutta pairs against scipy's at equal
@@ -41,6 +43,7 @@ SECTIONS: dict[str, str] = {
     "compile": "foucault_bench.bench.perf.compile_cache",
     "memory": "foucault_bench.bench.perf.memory",
     "sweeps": "foucault_bench.bench.perf.sweeps",
+    "batch": "foucault_bench.bench.perf.batch",
     "matrices": "foucault_bench.bench.perf.matrices",
     "limits": "foucault_bench.bench.perf.limits",
     "startup": "foucault_bench.bench.perf.startup",

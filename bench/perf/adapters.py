@@ -37,6 +37,8 @@ from foucault_bench.integrators.methods.cvode import CvodeAdams, CvodeBdf
 
 SECTION = "adapters"
 TARGET = 1.05
+OVERHEAD_TARGET_US = 5.0
+"""heyoka's adapter: most CPU µs per call over the bare library (issue: 20-55 µs on 0.1 ms solves)."""
 TOL = 1.0e-8
 DURATION_S = 300.0
 SCENE = "lab_3m"
@@ -178,8 +180,26 @@ def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
                     note="numba_rhs_into called from Python as CVODE calls it"))
     rows.append(Row(SECTION, "CVODE floor: per evaluation of a plain-Python oscillator RHS", cvode_floor_us(problem),
                     "µs", note="scikit-sundae's per-callback cost (arrays wrapped around CVODE's vectors)"))
+    rows.append(heyoka_overhead(problem, 300 if quick else 3000))
     rows.extend(jacobian_effect(problem, rounds))
     return rows, table, headers
+
+
+def heyoka_overhead(problem, rounds: int) -> Row:
+    """CPU µs the heyoka adapter adds per call to bare heyoka's reset and propagation, from ``rounds``
+    interleaved pairs of calls: the difference of the two lower deciles (on a busy machine every call is
+    slowed by the other processes' use of the caches, more the more memory it touches; the fastest tenth of
+    3000 calls is the cost with the least of that, and a tenth rather than the minimum keeps one lucky call
+    from deciding). The median of the paired differences is in the note: it carries the load."""
+    integrator = get_integrator("heyoka_taylor")
+    times = interleaved({"adapter": partial(integrator.solve, problem, tol=TOL, monitor=False),
+                         "bare": bare_heyoka(problem)}, rounds)
+    decile = {name: statistics.quantiles(durations, n=10)[0] for name, durations in times.items()}
+    overhead_us = (decile["adapter"] - decile["bare"]) * 1e6
+    median_us = statistics.median(a - b for a, b in zip(times["adapter"], times["bare"], strict=True)) * 1e6
+    return Row(SECTION, "heyoka_taylor: adapter overhead per call (lower deciles)", overhead_us, "µs",
+               OVERHEAD_TARGET_US, f"{rounds} paired calls, bare {decile['bare'] * 1e6:.0f} µs ({problem.t_out.size} "
+               f"output times); median of paired differences {median_us:.1f} µs")
 
 
 def jacobian_effect(problem, rounds: int) -> list[Row]:

@@ -26,10 +26,11 @@ import json
 import os
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from importlib.metadata import version
 from pathlib import Path
-from typing import Any, cast
+from typing import Any, Sequence, cast
 
 import numpy as np
 
@@ -127,6 +128,28 @@ def reference_for(scene: Scene) -> Reference:
             _store(directory / f"{key}.npz", scene, reference)
     _loaded[memory_key] = reference
     return reference
+
+
+def references_for(scenes: Sequence[Scene], workers: int | None = None) -> list[Reference]:
+    """The references of many scenes (an ensemble's members), in their order, each as ``reference_for`` gives it.
+
+    heyoka has no batch mode in real128 (``integrators.batch_heyoka``), so the missing references are computed
+    concurrently instead, one ``reference_for`` per thread on ``workers`` threads (default: the machine's
+    cores): heyoka releases the interpreter lock while it propagates, and each thread integrates with its own
+    copy of the compiled integrator (``integrators.methods.heyoka_taylor.working_integrator``). Every reference
+    is the one ``reference_for`` computes alone, bit for bit, cached the same way. The threads only fill the
+    disk cache; the turning points and rate are then measured here, in the calling thread, from the cached
+    trajectories (measured in a worker thread, a rate could differ from the one-by-one value in its last bits).
+    """
+    unique = {reference_key(scene): scene for scene in scenes}
+    directory = str(cache_directory())
+    missing = [scene for key, scene in unique.items() if (directory, key) not in _loaded]
+    with ThreadPoolExecutor(max_workers=workers or os.cpu_count() or 1) as pool:
+        list(pool.map(reference_for, missing))
+    for key in {reference_key(scene) for scene in missing}:
+        _loaded.pop((directory, key), None)
+    by_key = {key: reference_for(scene) for key, scene in unique.items()}
+    return [by_key[reference_key(scene)] for scene in scenes]
 
 
 def load_cached(scene: Scene) -> Reference | None:
