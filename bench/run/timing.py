@@ -91,7 +91,7 @@ class TimingPolicy:
     max_repeats: int = 40
     target_ci95_rel: float = 0.03
     min_total_s: float = 0.0
-    max_total_s: float = 0.3
+    max_total_s: float = 0.1
 
     def problems(self) -> list[str]:
         """Every inconsistency in the policy, one message each (empty when valid)."""
