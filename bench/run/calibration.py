@@ -20,7 +20,9 @@ cache) and loaded by the worker's warm-up (``warm_calibration``), never inside a
 from __future__ import annotations
 
 import functools
+import statistics
 import time
+from typing import Sequence
 
 CALIBRATION_ITERATIONS = 5_000_000
 """The loop's length that ``calibration_cpu_s`` is expressed in (the same scale as the rows stored before)."""
@@ -56,6 +58,6 @@ def calibration_chunk_cpu_s() -> float:
     return time.thread_time() - start
 
 
-def scaled_calibration_s(chunk_median_s: float) -> float:
-    """A chunk's CPU time expressed for the whole loop (``CALIBRATION_ITERATIONS``)."""
-    return chunk_median_s * (CALIBRATION_ITERATIONS / CHUNK_ITERATIONS)
+def scaled_calibration_s(chunks_s: Sequence[float]) -> float:
+    """The median of a run's chunk times (s) expressed for the whole loop (``CALIBRATION_ITERATIONS``)."""
+    return statistics.median(chunks_s) * (CALIBRATION_ITERATIONS / CHUNK_ITERATIONS)

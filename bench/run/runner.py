@@ -50,7 +50,6 @@ import math
 import numbers
 import os
 import signal
-import statistics
 import sys
 import threading
 from dataclasses import dataclass
@@ -214,7 +213,7 @@ def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
                        wall_time_s=timing.median_s, wall_time_spread_s=timing.spread_s, repeats=timing.repeats,
                        compile_time_s=timing.compile_s, cpu_time_ci95_rel=timing.cpu_ci95_rel,
                        cpu_time_repeats_s=json.dumps(list(timing.cpu_repeats_s)),
-                       calibration_cpu_s=scaled_calibration_s(statistics.median(timing.calibration_chunks_s)))
+                       calibration_cpu_s=scaled_calibration_s(timing.calibration_chunks_s))
             if not first.y.tobytes() == timed.y.tobytes() == last.y.tobytes():
                 row["message"] = "; ".join(filter(None, [row["message"], NOT_DETERMINISTIC]))
         stage = "verdicts"  # also for diverged runs: energy and trajectory gaps up to the divergence
