@@ -120,7 +120,7 @@ def report(rounds: list[dict]) -> str:
               f"{r['load'][0]:.1f} → {r['load'][1]:.1f} |" for r in rounds]
     lines += ["", "| comparison | runs | flagged | ratios after / before | calibrated ratios |", "|---|---|---|---|---|"]
     total = flagged = 0
-    same_code = [(a, b, None, "same code") for a, b in itertools.combinations(same, 2)]
+    same_code: list[tuple[str, str, bool | None, str]] = [(a, b, None, "same code") for a, b in itertools.combinations(same, 2)]
     same_code += [(a, b, False, "same code: all but rk4") for a, b in itertools.product(same, slowed)]
     for a, b, rk4, what in same_code:
         result = compare(frames[a], frames[b], rk4=rk4)

@@ -20,7 +20,7 @@ MARKER = "slowed by 10 % (bench.perf.slowed_rk4)"
 class SlowedRK4(RK4):
     """rk4 with ``SLOWDOWN`` more CPU time per solve (module docstring)."""
 
-    def solve(self, problem, **settings) -> Solution:  # type: ignore[override]
+    def solve(self, problem, **settings) -> Solution:
         start_s = time.thread_time()
         solution = super().solve(problem, **settings)
         until_s = time.thread_time() + SLOWDOWN * (time.thread_time() - start_s)
