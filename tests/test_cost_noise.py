@@ -13,7 +13,7 @@ import math
 import pandas as pd
 import pytest
 
-from foucault_bench.bench.perf.cost_noise import compare
+from foucault_bench.bench.perf.cost_noise import MARKER, compare
 from foucault_bench.bench.perf.protocol_replay import replay, replayed_count
 from foucault_bench.bench.run.timing import TimingPolicy
 
@@ -63,11 +63,13 @@ def test_the_noise_comparison_counts_flags_and_ratios_by_the_rule():
 
 def test_the_slowed_plugin_marks_its_rows_and_computes_the_same_numbers():
     """The plug-in's rk4 returns bitwise the same states as the registered one and appends its marker (what the
-    measurement checks in the stored rows); the registry is restored afterwards."""
+    measurement checks in the stored rows); the registry is restored afterwards, and importing the measurement
+    script alone leaves it alone."""
     from foucault_bench.bench.problems.scenes import SCENES
     from foucault_bench.integrators import REGISTRY
 
     original = REGISTRY["rk4"]
+    assert type(original).__module__ == "foucault_bench.integrators.methods.rk4"  # cost_noise is imported above
     try:
         from foucault_bench.bench.perf import slowed_rk4
 
@@ -75,6 +77,6 @@ def test_the_slowed_plugin_marks_its_rows_and_computes_the_same_numbers():
         step_s = 0.2 / SCENES["seed_2min"].params.pendulum_frequency_rad_s
         plain = original.solve(problem, step_s=step_s, monitor=False)
         slowed = slowed_rk4.SlowedRK4().solve(problem, step_s=step_s, monitor=False)
-        assert slowed.y.tobytes() == plain.y.tobytes() and slowed_rk4.MARKER in slowed.message
+        assert slowed.y.tobytes() == plain.y.tobytes() and MARKER in slowed.message
     finally:
         REGISTRY["rk4"] = original

@@ -38,11 +38,12 @@ import pandas as pd
 
 from foucault_bench.bench.atomic import write_text_file
 from foucault_bench.bench.history.changes import MIN_COST_S, cost_change
-from foucault_bench.bench.perf.slowed_rk4 import MARKER
 from foucault_bench.bench.run.compare import run_identity
 from foucault_bench.bench.run.store import ResultsStore
 
 SLOWED_PLUGIN = "foucault_bench.bench.perf.slowed_rk4"
+MARKER = "slowed by 10 % (bench.perf.slowed_rk4)"
+"""What the plug-in appends to its runs' messages (defined here: importing the plug-in replaces rk4)."""
 ROUNDS_FILE = "rounds.json"
 NOISE_MATRIX = textwrap.dedent("""\
     name = "cost-noise"

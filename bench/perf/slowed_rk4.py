@@ -1,20 +1,21 @@
 """A plug-in for the cost-noise measurement (``bench.perf.cost_noise``): rk4 made 10 % slower in CPU time.
 
 Importing it replaces the registered ``rk4`` by a subclass whose ``solve`` burns ``SLOWDOWN`` of the CPU time
-the solve itself took (a busy loop on the thread's CPU clock, after the solve), and appends ``MARKER`` to the
-solution's message, so that the stored rows show the slowed code reached the worker processes. Every number
-rk4 computes is unchanged. Used only as a matrix's ``plugins`` entry by the measurement.
+the solve itself took (a busy loop on the thread's CPU clock, after the solve), and appends
+``bench.perf.cost_noise.MARKER`` to the solution's message, so that the stored rows show the slowed code
+reached the worker processes. Every number rk4 computes is unchanged. Used only as a matrix's ``plugins``
+entry by the measurement.
 """
 
 from __future__ import annotations
 
 import time
 
+from foucault_bench.bench.perf.cost_noise import MARKER
 from foucault_bench.integrators import REGISTRY, Solution
 from foucault_bench.integrators.methods.rk4 import RK4
 
 SLOWDOWN = 0.10
-MARKER = "slowed by 10 % (bench.perf.slowed_rk4)"
 
 
 class SlowedRK4(RK4):
