@@ -185,8 +185,29 @@ def test_cost_change_needs_effect_and_evidence():
     comparison = cost_change(row(base), row(large))
     assert isinstance(comparison, CostComparison) and comparison.changed and comparison.p_value < 0.01
     few = cost_change(row(base[:3]), row([value * 1.2 for value in base[3:6]]))
-    assert few is not None and few.method.startswith("95 %")
+    assert few is not None and few.changed and few.p_value is None and few.method.startswith("beyond both intervals")
     assert cost_change(row(base), pd.Series({"cpu_time_repeats_s": None})) is None
+
+
+def test_a_cost_change_must_exceed_both_runs_noise_and_calibration_applies_between_machines():
+    """A 10 % ratio is a change between two steady runs (half-widths 1 % each) and not between two runs whose
+    repeats scatter by ±8 % (their intervals overlap); on one machine the repeats are compared as measured,
+    between two CPU models divided by each row's calibration."""
+    import pandas as pd
+
+    def row(samples: list[float], *, calibration_s: float = 1.0, cpu: str = "cpu A") -> pd.Series:
+        return pd.Series({"cpu_time_repeats_s": json.dumps(samples), "calibration_cpu_s": calibration_s,
+                          "cpu_time_ci95_rel": None, "cpu_model": cpu})
+
+    steady = [1.0 + 0.01 * offset for offset in (-1, -0.5, 0, 0.5, 1, 0.2, -0.2)]
+    scattered = [1.0 + 0.08 * offset for offset in (-1, -0.5, 0, 0.5, 1, 0.2, -0.2)]
+    assert cost_change(row(steady), row([value * 1.1 for value in steady])).changed
+    assert not cost_change(row(scattered), row([value * 1.1 for value in scattered])).changed
+    same_machine = cost_change(row(steady), row(steady, calibration_s=2.0))
+    assert same_machine.ratio == 1.0 and not same_machine.changed and same_machine.method.endswith("one machine")
+    faster_machine = cost_change(row(steady), row([value / 2 for value in steady], calibration_s=0.5, cpu="cpu B"))
+    assert faster_machine.ratio == pytest.approx(1.0) and not faster_machine.changed
+    assert faster_machine.method.endswith("calibrated")
 
 
 def test_revisions_fall_back_to_time_without_the_repository(history_db, tmp_path):

@@ -89,10 +89,24 @@ def test_target_row_verdict_and_cells(value, target, verdict) -> None:
 
 
 def test_interleaved_times_every_contender_in_alternating_order_and_ratios_are_per_round() -> None:
+    """A fake clock that each call of ``a`` advances by 4 ms and of ``b`` by 10 ms: after a warm-up and a
+    sizing call each, every turn is a batch lasting ``round_min_s`` (20 ms: 5 calls of a, 2 of b), the rounds
+    alternate the order, and each round's figure is the batch's median cost per call."""
     called: list[str] = []
-    times = interleaved({name: (lambda name=name: called.append(name)) for name in "ab"}, rounds=4)
+    clock = [0.0]
+    cost_s = {"a": 0.004, "b": 0.01}
+
+    def contender(name: str):
+        def call() -> None:
+            called.append(name)
+            clock[0] += cost_s[name]
+        return call
+
+    times = interleaved({name: contender(name) for name in "ab"}, rounds=4, clock=lambda: clock[0], round_min_s=0.02)
     assert [len(times["a"]), len(times["b"])] == [4, 4]
-    assert "".join(called) == "ab" + "ab" + "ba" + "ab" + "ba"  # warm-up, then rounds alternating the order
+    forward, backward = "a" * 5 + "b" * 2, "b" * 2 + "a" * 5
+    assert "".join(called) == "aabb" + forward + backward + forward + backward  # warm-ups, then alternating rounds
+    assert times["a"] == pytest.approx([0.004] * 4) and times["b"] == pytest.approx([0.01] * 4)
     assert median_ratio([2.0, 4.0, 9.0], [1.0, 1.0, 3.0]) == 3.0
 
 

@@ -127,7 +127,7 @@ def test_quick_matrix_runs_end_to_end(tmp_path, capsys):
 def _check_stored_precision(ok) -> None:
     """Every timed row's cost figures recomputed from its stored repeats (``cpu_time_repeats_s``): their count,
     median and spread, and the precision from scipy's binomial order-statistic interval; and a positive
-    machine calibration, the same for the rows of one worker process."""
+    machine calibration (timed beside each run's repeats)."""
     import json
     import statistics
 
@@ -151,7 +151,7 @@ def _check_stored_precision(ok) -> None:
 
 def test_rows_carry_their_cost_precision_repeats_and_calibration(tmp_path):
     """Runs of a short scene under the default timing protocol: every stored figure recomputed from the stored
-    repeats (``_check_stored_precision``), one calibration per worker process."""
+    repeats (``_check_stored_precision``), each with the calibration timed beside its own repeats."""
     matrix_path = write(tmp_path / "precision.toml", """
         scenes = ["seed_2min"]
         integrators = ["rk4", "scipy_rk45"]
@@ -165,7 +165,6 @@ def test_rows_carry_their_cost_precision_repeats_and_calibration(tmp_path):
     ok = rows[rows["status"] == "ok"]
     assert len(ok) == len(matrix.runs) == 3
     _check_stored_precision(ok)
-    assert ok["calibration_cpu_s"].nunique() == 1  # one worker process, one calibration
 
 
 def test_each_compiled_function_is_built_by_one_run_before_the_others(tmp_path):

@@ -188,16 +188,15 @@ def _check_policy(policy: TimingPolicy, costs_s: list[float]) -> None:
 def test_the_default_protocol_spends_where_precision_needs_it() -> None:
     """The default policy (bench/README.md "How a run is measured"): a steady 10-ms run stops at the floor of 6
     repeats with its precision established; a 10-ms run whose repeats scatter by ± 20 % repeats on until the
-    time cap (0.3 s: 30 repeats) and stores the precision it reached; a 0.2-s run stops at the time cap after 2
-    repeats (no 95 % interval from 2); a 1.5-s run is repeated once. The quick matrix stops at 0.05 s or 5
-    repeats."""
+    time cap (0.1 s: 10 repeats) and stores the precision it reached; a 0.2-s run and a 1.5-s run are repeated
+    once (no 95 % interval from 1). The quick matrix stops at 0.05 s or 5 repeats."""
     from foucault_bench.bench.run.matrix import load_matrix
 
     default, quick = load_matrix("default").timing, load_matrix("quick").timing
     assert default == TimingPolicy()
     scatter = [0.01 * (1.0 + 0.2 * math.sin(index)) for index in range(60)]
     for policy, costs_s, repeats, established in (
-            (default, [0.01], CI_MIN_REPEATS, True), (default, scatter, 30, True), (default, [0.2], 2, False),
+            (default, [0.01], CI_MIN_REPEATS, True), (default, scatter, 10, True), (default, [0.2], 1, False),
             (default, [1.5], 1, False), (quick, [0.01], 5, False), (quick, [0.02], 3, False), (quick, [0.2], 1, False)):
         _, _, timing = _FakeRun(costs_s).timed(policy)
         assert timing is not None and timing.repeats == repeats, (policy, costs_s[0])
@@ -220,3 +219,32 @@ def test_the_median_interval_holds_for_thousands_of_repeats() -> None:
         tail += math.comb(n, k)
         k += 1
     assert median_ci95([float(value) for value in range(n)]) == (float(k - 1), float(n - k))
+
+
+def test_calibration_chunks_follow_the_first_repeat_and_stay_within_their_share() -> None:
+    """``calibrate`` runs after the first repeat and after a later one only while the chunks so far cost less
+    than ``calibration_share`` of the repeats; the chunks never count in the repeats, and the calls interleave
+    (a chunk right after the repeat it calibrates)."""
+    run = _FakeRun([0.5] + [0.01] * 60)
+    events: list[str] = []
+
+    def repeat() -> int:
+        events.append("run")
+        return run()
+
+    def calibrate() -> float:
+        events.append("chunk")
+        return 0.0045  # CPU of one chunk, from its own clock (the run's clocks do not move)
+
+    policy = TimingPolicy(min_repeats=20, max_repeats=20, max_total_s=10.0)
+    _, _, timing = time_repeated(repeat, policy, wall_clock=lambda: run.wall_s, cpu_clock=lambda: run.cpu_s,
+                                 calibrate=calibrate, calibration_share=0.1)
+    assert timing is not None and timing.repeats == 20 and timing.cpu_repeats_s == pytest.approx((0.01,) * 20)
+    expected, chunks_s = ["run"], 0.0  # the warm-up, then the rule read literally
+    for count in range(1, 21):
+        expected.append("run")
+        if chunks_s == 0.0 or chunks_s < 0.1 * 0.01 * count:
+            expected.append("chunk")
+            chunks_s += 0.0045
+    assert events == expected and timing.calibration_chunks_s == (0.0045,) * expected.count("chunk")
+    assert 1 < len(timing.calibration_chunks_s) < 20  # interleaved, not one per repeat at this share

@@ -10,13 +10,18 @@ integrator, the exact setting), whatever the code version that made them.
   only beyond ``CROSS_MACHINE_RELATIVE`` of the larger value or ``CROSS_MACHINE_ABSOLUTE`` (a round-off level
   of the relative errors); counts and statuses stay exact. Both tolerances are choices stated here, not
   measurements.
-* **Cost** (CPU time): each run's timed repeats (``cpu_time_repeats_s``) divided by a calibration timed in the
-  same worker (``calibration_cpu_s``, a fixed compiled loop) when both sides have one, so that machine speed
-  cancels. A change needs both an effect, the ratio of the medians beyond ``1 ± COST_MIN_EFFECT``, and evidence
-  beyond noise: a two-sided Mann–Whitney U test (as asv's ``compare`` uses; scipy.stats.mannwhitneyu) at
-  ``COST_SIGNIFICANCE`` when both sides have ``MIN_REPEATS_FOR_TEST`` repeats, else the two 95 % confidence
-  intervals of the medians (``cpu_time_ci95_rel``, or the range of the repeats) must not overlap. Rows without
-  stored repeats (an older database) have no cost comparison.
+* **Cost** (CPU time): each run's timed repeats (``cpu_time_repeats_s``). Between two machines (another CPU
+  model on the two sides) they are divided by the calibration timed beside each run (``calibration_cpu_s``, a
+  fixed compiled loop, ``bench.run.calibration``), so that machine speed cancels; on one machine they are
+  compared as measured, because there the calibration only adds its own noise (measured in bench/PERF.md
+  "Cost changes across revisions": it does not follow the run-to-run shifts of the runs' costs). A change
+  needs an effect beyond the noise of both runs: the ratio of the medians beyond ``1 ± COST_MIN_EFFECT`` and
+  beyond the sum of the two medians' 95 % half-widths (``cpu_time_ci95_rel``, or half the repeats' range
+  relative to the median where the row states no interval): the two intervals do not overlap; and, where both
+  sides have ``MIN_REPEATS_FOR_TEST`` repeats, a two-sided Mann–Whitney U test (as asv's ``compare`` uses;
+  scipy.stats.mannwhitneyu) at ``COST_SIGNIFICANCE``. Rows without stored repeats (an older database) have no
+  cost comparison. Its false-alarm and detection rates on a busy machine are measured by
+  ``bench.perf.cost_noise`` (bench/PERF.md).
 """
 
 from __future__ import annotations
@@ -141,11 +146,12 @@ def _has_calibration(row: Mapping[str, Any]) -> bool:
     return value is not None and pd.notna(value) and float(value) > 0
 
 
-def _interval(samples: np.ndarray, ci95_rel: Any) -> tuple[float, float]:
-    median = float(np.median(samples))
+def half_width(samples: np.ndarray, ci95_rel: Any) -> float:
+    """The relative 95 % half-width of a run's median: the stored one, else half the repeats' range over the
+    median (0 for a single repeat)."""
     if ci95_rel is not None and pd.notna(ci95_rel) and math.isfinite(float(ci95_rel)):
-        return median * (1 - float(ci95_rel)), median * (1 + float(ci95_rel))
-    return float(samples.min()), float(samples.max())
+        return float(ci95_rel)
+    return float(samples.max() - samples.min()) / (2.0 * float(np.median(samples)))
 
 
 def cost_change(before: Mapping[str, Any], after: Mapping[str, Any]) -> CostComparison | None:
@@ -153,20 +159,19 @@ def cost_change(before: Mapping[str, Any], after: Mapping[str, Any]) -> CostComp
     stored repeats."""
     from scipy.stats import mannwhitneyu
 
-    calibrated = _has_calibration(before) and _has_calibration(after)
+    calibrated = _cross_machine(before, after) and _has_calibration(before) and _has_calibration(after)
     a, b = cost_samples(before, calibrated=calibrated), cost_samples(after, calibrated=calibrated)
     if a is None or b is None:
         return None
     ratio = float(np.median(b) / np.median(a))
-    large = abs(math.log(ratio)) > math.log1p(COST_MIN_EFFECT)
-    suffix = "calibrated" if calibrated else "not calibrated"
+    noise = half_width(a, before.get("cpu_time_ci95_rel")) + half_width(b, after.get("cpu_time_ci95_rel"))
+    large = abs(math.log(ratio)) > max(math.log1p(COST_MIN_EFFECT), noise)
+    suffix = "calibrated" if calibrated else "one machine"
     if len(a) >= MIN_REPEATS_FOR_TEST and len(b) >= MIN_REPEATS_FOR_TEST:
         p_value = float(mannwhitneyu(a, b, alternative="two-sided").pvalue)
-        return CostComparison(ratio, large and p_value < COST_SIGNIFICANCE, f"Mann-Whitney U, {suffix}", p_value)
-    low_a, high_a = _interval(a, before.get("cpu_time_ci95_rel"))
-    low_b, high_b = _interval(b, after.get("cpu_time_ci95_rel"))
-    apart = high_a < low_b or high_b < low_a
-    return CostComparison(ratio, large and apart, f"95 % intervals of the medians, {suffix}")
+        return CostComparison(ratio, large and p_value < COST_SIGNIFICANCE,
+                              f"beyond both intervals, Mann-Whitney U, {suffix}", p_value)
+    return CostComparison(ratio, large, f"beyond both intervals, {suffix}")
 
 
 def _cross_machine(before: Mapping[str, Any], after: Mapping[str, Any]) -> bool:

@@ -3,9 +3,13 @@
 Timing conventions (the developers' guide: warm-up excluded, repeats, median, compile time reported apart):
 
 * ``interleaved`` calls each contender once untimed (warm-up: compilation, caches), then runs rounds in which
-  every contender is timed once, in forward order in even rounds and reverse order in odd ones (so that
-  running first or second favours nobody); a ratio is taken within each round and the median of the per-round
-  ratios is reported, so that a change of machine load between rounds cancels out.
+  every contender has one turn, in forward order in even rounds and reverse order in odd ones (so that
+  running first or second favours nobody). A turn is a batch of calls lasting about ``ROUND_MIN_S``, each
+  timed, and the batch's median is the contender's figure for the round: one call of 0.1 ms is at the mercy
+  of a single interruption or cache flush by the neighbour's work, the median of 200 is not (a round of single
+  calls made the heyoka adapter's ratio 1.21× in one run and 1.55× in the next). A ratio is taken within each
+  round and the median of the per-round ratios is reported, so that a change of machine load between rounds
+  (which moves both contenders of a round together) cancels out.
 * Compute-bound code on one thread (loops, adapters) is timed with the thread's CPU time
   (``time.thread_time``): on a shared machine it leaves out the time the thread waits for a core, which
   wall-clock time would add at random. Whole commands (matrix runs) and multi-threaded work are timed by wall
@@ -17,6 +21,7 @@ Timing conventions (the developers' guide: warm-up excluded, repeats, median, co
 from __future__ import annotations
 
 import json
+import math
 import os
 import platform
 import statistics
@@ -31,6 +36,10 @@ VERDICT_MET = "met"
 VERDICT_MISSED = "missed"
 VERDICT_INFO = "info"
 VERDICT_SKIPPED = "skipped"
+ROUND_MIN_S = 0.02
+"""Length of one contender's batch in a round: 20 ms, long against the scheduler's interruptions of the
+thread (a few ms at most on a loaded machine), short enough for tens of rounds per second."""
+MAX_BATCH = 1000
 
 
 @dataclass(frozen=True)
@@ -78,19 +87,28 @@ def format_number(value: float) -> str:
     return f"{value:.2e}"
 
 
-def interleaved(calls: dict[str, Callable[[], Any]], rounds: int,
-                clock: Callable[[], float] = time.thread_time) -> dict[str, list[float]]:
-    """Durations (s) of ``rounds`` timed calls of each contender, interleaved (alternating order), after one
-    untimed warm-up each."""
-    for call in calls.values():
+def interleaved(calls: dict[str, Callable[[], Any]], rounds: int, clock: Callable[[], float] = time.thread_time,
+                round_min_s: float = ROUND_MIN_S) -> dict[str, list[float]]:
+    """Per-round cost (s per call) of each contender over ``rounds`` interleaved rounds (alternating order),
+    after one untimed warm-up each: in every round each contender's turn is a batch of calls lasting about
+    ``round_min_s`` (the batch size from a second untimed call, at most ``MAX_BATCH``), each call timed, and
+    the batch's median is the round's figure (module docstring)."""
+    batch: dict[str, int] = {}
+    for name, call in calls.items():
         call()
+        start = clock()
+        call()
+        batch[name] = max(1, min(MAX_BATCH, math.ceil(round_min_s / max(clock() - start, 1e-9))))
     durations: dict[str, list[float]] = {name: [] for name in calls}
     for round_number in range(rounds):
         order = list(calls.items())
         for name, call in order if round_number % 2 == 0 else reversed(order):
-            start = clock()
-            call()
-            durations[name].append(clock() - start)
+            batch_s = []
+            for _ in range(batch[name]):
+                start = clock()
+                call()
+                batch_s.append(clock() - start)
+            durations[name].append(statistics.median(batch_s))
     return durations
 
 

@@ -59,7 +59,7 @@ from tqdm import tqdm
 
 from foucault_bench.bench.errors import RunInterrupted
 from foucault_bench.bench.problems.scene_key import scene_key
-from foucault_bench.bench.run.calibration import calibration_cpu_s
+from foucault_bench.bench.run.calibration import calibration_chunk_cpu_s, scaled_calibration_s
 from foucault_bench.bench.run.executors import WORKER_DIED, DaskExecutor, LocalExecutor, make_executor
 from foucault_bench.bench.run.timing import limit_threads, peak_rss_mb, time_repeated
 from foucault_bench.bench.run.worker import describe
@@ -200,7 +200,8 @@ def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
             return solution
 
         timed, last, timing = time_repeated(lambda: solve(False), spec.timing,
-                                            accept=lambda solution: solution.status == STATUS_OK)
+                                            accept=lambda solution: solution.status == STATUS_OK,
+                                            calibrate=calibration_chunk_cpu_s)
         first = solve(True) if integrator.streams_step_metrics else timed  # untimed: + per-step metrics
         row.update(status=first.status, message=first.message,
                    **{name: None if getattr(first, name) is None else int(getattr(first, name)) for name in COUNTERS})
@@ -212,7 +213,7 @@ def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
                        wall_time_s=timing.median_s, wall_time_spread_s=timing.spread_s, repeats=timing.repeats,
                        compile_time_s=timing.compile_s, cpu_time_ci95_rel=timing.cpu_ci95_rel,
                        cpu_time_repeats_s=json.dumps(list(timing.cpu_repeats_s)),
-                       calibration_cpu_s=calibration_cpu_s())
+                       calibration_cpu_s=scaled_calibration_s(timing.calibration_chunks_s))
             if not first.y.tobytes() == timed.y.tobytes() == last.y.tobytes():
                 row["message"] = "; ".join(filter(None, [row["message"], NOT_DETERMINISTIC]))
         stage = "verdicts"  # also for diverged runs: energy and trajectory gaps up to the divergence

@@ -25,6 +25,10 @@ to a stated precision (defaults: ``TimingPolicy``):
    ``warm-up − median`` in CPU time (JIT compilation or a disk-cache load; clipped at 0 because a warm-up that
    compiles nothing can be faster than the median). CPU time, not wall time: on a loaded machine the warm-up's
    wall time is mostly waiting for a core (seen: 59 s of "compile" over 4 runs at load average 21).
+4. a calibration (optional, ``calibrate``: the runner's is ``bench.run.calibration``), a fixed compiled
+   workload timed in chunks between the repeats: after the first repeat and after each later one while the
+   chunks have cost less than ``calibration_share`` of the repeats. The run's cost relative to it is measured
+   under the same load as the run, which is what comparing two runs needs (``bench.history.changes``).
 
 **The confidence interval** (``median_ci95``) is the distribution-free order-statistic interval of the median:
 for n sorted repeats x₍₁₎ ≤ … ≤ x₍ₙ₎ it is [x₍ₖ₎, x₍ₙ₊₁₋ₖ₎] with the largest k such that
@@ -87,7 +91,7 @@ class TimingPolicy:
     max_repeats: int = 40
     target_ci95_rel: float = 0.03
     min_total_s: float = 0.0
-    max_total_s: float = 0.3
+    max_total_s: float = 0.1
 
     def problems(self) -> list[str]:
         """Every inconsistency in the policy, one message each (empty when valid)."""
@@ -117,6 +121,7 @@ class Timing:
     cpu_repeats_s: tuple[float, ...]
     repeats: int
     compile_s: float
+    calibration_chunks_s: tuple[float, ...] = ()
 
 
 def median_ci95(samples: Sequence[float]) -> tuple[float, float] | None:
@@ -153,12 +158,17 @@ def median_ci95_rel(samples: Sequence[float]) -> float | None:
 def time_repeated(call: Callable[[], Result], policy: TimingPolicy,
                   accept: Callable[[Result], bool] = lambda result: True, *,
                   wall_clock: Callable[[], float] = time.perf_counter,
-                  cpu_clock: Callable[[], float] = time.thread_time) -> tuple[Result, Result, Timing | None]:
+                  cpu_clock: Callable[[], float] = time.thread_time,
+                  calibrate: Callable[[], float] | None = None,
+                  calibration_share: float = 0.1) -> tuple[Result, Result, Timing | None]:
     """Run ``call`` by the protocol of the module docstring.
 
     Returns the warm-up result, the last repeat's result (the warm-up's when no repeat was made) and the
     timing; when ``accept(warm-up result)`` is false (a failed or diverged run) no repeat is made and the
     timing is ``None``. ``wall_clock`` and ``cpu_clock`` are the two clocks (seconds; a test passes fakes).
+    ``calibrate`` (optional) times one chunk of a fixed workload and returns its CPU time: it is called after
+    the first repeat and after every later one while the chunks so far cost less than ``calibration_share``
+    of the repeats (module docstring, rule 4); it never counts in the repeats.
     """
     cpu_start = cpu_clock()
     first = call()
@@ -167,12 +177,15 @@ def time_repeated(call: Callable[[], Result], policy: TimingPolicy,
         return first, first, None
     durations: list[float] = []
     cpu_durations: list[float] = []
+    chunks: list[float] = []
     last = first
     while True:
         start, cpu_start = wall_clock(), cpu_clock()
         last = call()
         cpu_durations.append(cpu_clock() - cpu_start)
         durations.append(wall_clock() - start)
+        if calibrate is not None and (not chunks or math.fsum(chunks) < calibration_share * math.fsum(cpu_durations)):
+            chunks.append(calibrate())
         if stop_repeating(cpu_durations, policy):
             break
     cpu_median_s = statistics.median(cpu_durations)
@@ -185,6 +198,7 @@ def time_repeated(call: Callable[[], Result], policy: TimingPolicy,
         cpu_repeats_s=tuple(cpu_durations),
         repeats=len(durations),
         compile_s=max(0.0, warm_up_cpu_s - cpu_median_s),
+        calibration_chunks_s=tuple(chunks),
     )
 
 

@@ -61,7 +61,7 @@ WORKER_MODULES = (
     "foucault_bench.bench.verdicts.columns",
 )
 """What a worker imports to run (``warm_up``, its first task, while the main process validates the matrix; it also
-times the calibration loop then)."""
+loads the calibration loop then)."""
 
 _SPAWNER = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="foucault-bench-spawner")
 """Starts every worker: its thread lives as long as the process, which is what PR_SET_PDEATHSIG watches."""
@@ -101,14 +101,14 @@ def describe(error: BaseException) -> str:
 
 
 def warm_up() -> None:
-    """Import ``WORKER_MODULES`` and time the machine-speed calibration (``bench.run.calibration``)."""
+    """Import ``WORKER_MODULES`` and load the machine-speed calibration's loop (``bench.run.calibration``)."""
     import importlib
 
-    from foucault_bench.bench.run.calibration import calibration_cpu_s
+    from foucault_bench.bench.run.calibration import warm_calibration
 
     for module_name in WORKER_MODULES:
         importlib.import_module(module_name)
-    calibration_cpu_s()
+    warm_calibration()
 
 
 class WorkerProcess:

@@ -1,0 +1,82 @@
+"""Tests of the measurement tools for the timing protocol and the cost-change rule (bench/perf/cost_noise.py,
+bench/perf/protocol_replay.py, bench/perf/slowed_rk4.py).
+
+Timed repeats are made-up numbers: nothing here measures time. Each figure the tools print is recomputed here
+from the rows by the rule read literally.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pandas as pd
+import pytest
+
+from foucault_bench.bench.perf.cost_noise import MARKER, compare
+from foucault_bench.bench.perf.protocol_replay import replay, replayed_count
+from foucault_bench.bench.run.timing import TimingPolicy
+
+
+def _row(integrator: str, repeats_s: list[float], calibration_s: float = 0.01, ci95_rel: float | None = None) -> dict:
+    ordered = sorted(repeats_s)
+    middle = len(ordered) // 2
+    median_s = ordered[middle] if len(ordered) % 2 else (ordered[middle - 1] + ordered[middle]) / 2
+    return dict(integrator=integrator, cpu_time_s=median_s, cpu_time_repeats_s=json.dumps(repeats_s),
+                calibration_cpu_s=calibration_s, cpu_time_ci95_rel=ci95_rel, compile_time_s=0.5)
+
+
+def test_a_replayed_policy_stops_where_its_rule_would_have():
+    """Cap 0.1 s: repeats of 30 ms stop at the fourth (0.12 s ≥ 0.1 s, 0.09 s < 0.1 s); identical 10-ms repeats
+    stop at the floor of 6 (a zero-width interval); three stored repeats of 10 ms are fewer than the rule wants."""
+    policy = TimingPolicy(max_total_s=0.1)
+    assert replayed_count([0.03] * 10, policy) == 4
+    assert replayed_count([0.01] * 10, policy) == 6
+    assert replayed_count([0.01] * 3, policy) is None
+
+
+def test_the_replay_sums_the_stored_and_the_replayed_cpu():
+    """Two rows (a 30-ms rk4 run, a 10-ms cvode run): the runs once count rk4 twice (it streams step metrics:
+    a monitored call beside the warm-up), the repeats and the replayed prefixes sum as cut by hand."""
+    frame = pd.DataFrame([_row("rk4", [0.03] * 10, ci95_rel=0.0), _row("cvode_adams", [0.01] * 10, ci95_rel=0.0)])
+    result = replay(frame, TimingPolicy(max_total_s=0.1))
+    assert result["once_s"] == pytest.approx(2 * 0.03 + 0.01)
+    assert result["repeats_s"] == pytest.approx(0.3 + 0.1)
+    assert result["replayed_repeats_s"] == pytest.approx(4 * 0.03 + 6 * 0.01)
+    assert result["compile_s"] == pytest.approx(1.0)
+    assert (result["runs_of_10ms"], result["agree"], result["disagree"], result["beyond_stored"]) == (2, 2, 0, 0)
+
+
+def test_the_noise_comparison_counts_flags_and_ratios_by_the_rule():
+    """Same-code rows agree to 1 % (no flag); rk4's repeats 10 % slower with a 1 % scatter are flagged slower;
+    the ratios are the medians' and the calibrated ones divide by each row's calibration."""
+    steady = [0.02 * (1 + 0.01 * math.sin(index)) for index in range(8)]
+    before = pd.DataFrame([_row("rk4", steady), _row("verlet", steady)], index=["a rk4", "a verlet"])
+    after = pd.DataFrame([_row("rk4", [value * 1.1 for value in steady], calibration_s=0.011),
+                          _row("verlet", [value * 1.001 for value in steady])], index=["a rk4", "a verlet"])
+    slowed = compare(before, after, rk4=True)
+    assert (slowed["runs"], slowed["flagged"], slowed["slower"]) == (1, 1, 1)
+    assert slowed["ratios"] == pytest.approx([1.1]) and slowed["calibrated"] == pytest.approx([1.0])
+    same = compare(before, after, rk4=False)
+    assert (same["runs"], same["flagged"]) == (1, 0) and same["ratios"] == pytest.approx([1.001])
+
+
+def test_the_slowed_plugin_marks_its_rows_and_computes_the_same_numbers():
+    """The plug-in's rk4 returns bitwise the same states as the registered one and appends its marker (what the
+    measurement checks in the stored rows); the registry is restored afterwards, and importing the measurement
+    script alone leaves it alone."""
+    from foucault_bench.bench.problems.scenes import SCENES
+    from foucault_bench.integrators import REGISTRY
+
+    original = REGISTRY["rk4"]
+    assert type(original).__module__ == "foucault_bench.integrators.methods.rk4"  # cost_noise is imported above
+    try:
+        from foucault_bench.bench.perf import slowed_rk4
+
+        problem = SCENES["seed_2min"].problem()
+        step_s = 0.2 / SCENES["seed_2min"].params.pendulum_frequency_rad_s
+        plain = original.solve(problem, step_s=step_s, monitor=False)
+        slowed = slowed_rk4.SlowedRK4().solve(problem, step_s=step_s, monitor=False)
+        assert slowed.y.tobytes() == plain.y.tobytes() and MARKER in slowed.message
+    finally:
+        REGISTRY["rk4"] = original
