@@ -17,7 +17,7 @@ import sys
 import numpy as np
 import pytest
 
-from foucault_bench.bench.perf.c_loops import MODELS, SCHEMES, WITHOUT_C_REFERENCE, CompilerMissing, compile_c_loops
+from foucault_bench.bench.perf.c_loops import MODELS, SCHEMES, CompilerMissing, compile_c_loops
 from foucault_bench.bench.perf.fixed_step import KH, LoopPair
 from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio, run_probe
 from foucault_bench.integrators import get_integrator
@@ -45,10 +45,9 @@ def test_c_loop_computes_the_numba_kernel_states(c_loops, model: str, scheme: st
 
 
 def test_every_built_in_fixed_step_scheme_has_a_c_reference() -> None:
-    """Each built-in fixed-step scheme has a C loop, or is listed as one without (a known gap, printed by perf)."""
+    """Each built-in fixed-step scheme has a C loop in loops.c."""
     fixed_step = {name for name in built_in_names() if isinstance(get_integrator(name), FixedStepIntegrator)}
-    assert fixed_step == set(SCHEMES) | set(WITHOUT_C_REFERENCE)
-    assert not set(SCHEMES) & set(WITHOUT_C_REFERENCE)
+    assert fixed_step == set(SCHEMES)
 
 
 @pytest.mark.parametrize(("scheme", "kh"), [

@@ -25,7 +25,7 @@ from typing import cast
 
 import numpy as np
 
-from foucault_bench.bench.perf.c_loops import MODELS, SCHEMES, WITHOUT_C_REFERENCE, CLoops, CompilerMissing, compile_c_loops
+from foucault_bench.bench.perf.c_loops import MODELS, SCHEMES, CLoops, CompilerMissing, compile_c_loops
 from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio
 from foucault_bench.integrators import FixedStepIntegrator, get_integrator
 from foucault_bench.models import MODELS as MODEL_REGISTRY
@@ -149,6 +149,4 @@ def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
             rows.append(Row(SECTION, f"{scheme}/{model}, verdicts on: numba / C", cost.on_ratio, "×", TARGET_ON,
                             f"{cost.numba_monitor_ns:.1f} ns/step; same streaming in C: "
                             f"{cost.c_monitor_ratio:.2f}×"))
-    rows += [Row(SECTION, f"{scheme}: numba / C", None, "×", TARGET_OFF, "no C loop in loops.c yet (a known gap)")
-             for scheme in WITHOUT_C_REFERENCE]
     return rows, table, headers
