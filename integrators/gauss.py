@@ -28,7 +28,7 @@ coefficient matrix), so the solve converges for kh < 1/ρ(A): 2 for the midpoint
 for the two-stage method (ρ = 1/√12). The methods themselves are A-stable; that solve limit is the
 ``stability_limit_kh`` they declare, because beyond it this implementation reports divergence. Just below it
 the iteration's round-off floor, which grows like ε/(1 − ρ), rises above ``CONVERGED_INCREMENT``: the stability
-study measures 3.4627 for the two-stage method against 2√3 = 3.4641 (4e-4 relative) and 1.9992 for the midpoint
+study measures 3.4625 for the two-stage method against 2√3 = 3.4641 (5e-4 relative) and 1.9993 for the midpoint
 rule.
 """
 

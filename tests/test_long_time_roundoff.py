@@ -80,3 +80,21 @@ def test_the_fit_recovers_a_known_law() -> None:
     exponent, constant = fit_growth(steps, 0.7 * EPS * steps**0.5)
     assert exponent == pytest.approx(0.5) and constant == pytest.approx(0.7)
     assert math.isclose(fit_growth(steps, 2.0 * EPS * steps)[0], 1.0)
+
+
+def test_the_chart_draws_each_integrators_rows_and_brouwers_line(growth: pd.DataFrame) -> None:
+    """Oracle of the report's chart (reports.roundoff): every line recomputed from the study table."""
+    from foucault_bench.reports.roundoff import BROUWER_LABEL, roundoff_growth as chart
+
+    axes = chart(growth).axes[0]
+    labels = [text.get_text() for text in axes.get_legend().get_texts()]
+    lines = {line.get_label(): line for line in axes.lines}
+    for name, rows in growth.groupby("integrator"):
+        label = f"{name} (exponent {rows['exponent'].iloc[0]:.2f})"
+        assert label in labels
+        drawn = [line for line in axes.lines if np.array_equal(line.get_xdata(), rows["steps"].to_numpy(dtype=float))
+                 and np.array_equal(line.get_ydata(), rows["drift_rms"].to_numpy())]
+        assert len(drawn) == 1, name
+    steps = np.sort(growth["steps"].unique().astype(float))
+    assert np.allclose(lines[BROUWER_LABEL].get_ydata(), EPS * np.sqrt(steps), rtol=1e-15, atol=0.0)
+    assert len(labels) == growth["integrator"].nunique() + 1

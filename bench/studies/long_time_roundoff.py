@@ -29,6 +29,7 @@ from typing import Callable, cast
 import numpy as np
 import pandas as pd
 
+from foucault_bench.bench.studies.common import progress_over, with_config_columns
 from foucault_bench.bench.verdicts.stability import step_matrix
 from foucault_bench.integrators import FixedStepIntegrator, get_integrator
 from foucault_bench.integrators.fixed_step import build_kernel
@@ -141,10 +142,11 @@ def fit_growth(steps: np.ndarray, drift: np.ndarray) -> tuple[float, float]:
     return float(slope), float(10.0**intercept / np.finfo(np.float64).eps)
 
 
-def roundoff_growth(config: RoundoffConfig = RoundoffConfig()) -> pd.DataFrame:
-    """One row per (integrator, decade): kh, compensated (the config's), steps (10^decade), drift_rms (median over the releases of the RMS of
+def roundoff_growth(config: RoundoffConfig = RoundoffConfig(), progress: bool = False) -> pd.DataFrame:
+    """One row per (integrator, decade): family, kh, compensated (the config's), steps (10^decade), drift_rms (median over the releases of the RMS of
     ΔQ/Q₀ over the window (n/√10, n]), drift_min and drift_max (over the releases), and the integrator's fitted
-    exponent and constant (``fit_growth`` over all its decades), repeated on its rows."""
+    exponent and constant (``fit_growth`` over all its decades), repeated on its rows; plus the config's other
+    scalars as ``config_<field>`` columns."""
     params = PendulumParameters(length_m=config.length_m, latitude_deg=config.latitude_deg,
                                 amplitude_m=config.amplitude_m)
     h = config.kh / params.pendulum_frequency_rad_s
@@ -152,7 +154,7 @@ def roundoff_growth(config: RoundoffConfig = RoundoffConfig()) -> pd.DataFrame:
     decades = np.arange(config.min_decade, config.max_decade + 1)
     steps_at = np.arange(n_steps // config.stride + 1) * config.stride
     rows = []
-    for name in config.integrators:
+    for name in progress_over(list(config.integrators), "long-time round-off", progress):
         integrator = cast(FixedStepIntegrator, get_integrator(name))
         q = invariant_form(scaled_step_matrix(integrator, params, h))
         per_release = np.array([[math.sqrt(float(np.mean(drift[(steps_at > 10.0 ** (d - 0.5)) & (steps_at <= 10**d)] ** 2)))
@@ -162,7 +164,7 @@ def roundoff_growth(config: RoundoffConfig = RoundoffConfig()) -> pd.DataFrame:
                                               for state0 in releases(config, params))])
         rms = np.median(per_release, axis=0)
         exponent, constant = fit_growth(10.0**decades, rms)
-        rows += [{"integrator": name, "kh": config.kh, "compensated": config.compensated, "steps": int(10**d), "drift_rms": rms[i],
+        rows += [{"integrator": name, "family": integrator.family, "kh": config.kh, "compensated": config.compensated, "steps": int(10**d), "drift_rms": rms[i],
                   "drift_min": per_release[:, i].min(), "drift_max": per_release[:, i].max(),
                   "exponent": exponent, "constant": constant} for i, d in enumerate(decades)]
-    return pd.DataFrame(rows)
+    return with_config_columns(pd.DataFrame(rows), config, exclude=("integrators", "kh", "compensated"))

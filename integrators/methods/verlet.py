@@ -7,7 +7,10 @@ H = ½|p|² − ω·(r×p) + U(r), where −∇U(r) = F(r, 0) + ω×(ω×r) (``M
 
     R(h/2) ∘ V(h) ∘ R(h/2)
 
-* R(τ): the exact flow of −ω·(r×p), a rotation of r and p about ω by the angle −|ω|τ (Rodrigues' formula);
+* R(τ): the exact flow of −ω·(r×p), a rotation of r and p about ω by the angle −|ω|τ (Rodrigues' formula; on the
+  plane as three shears, t = tan(a/2), s = sin a: Paeth, Graphics Gems (1990), "A fast algorithm for general raster
+  rotation", applied to r, with their inverse transposes applied to p, so that the rounded turn is still exactly
+  symplectic and the invariants do not drift by ε a turn, bench/PERF.md "Round-off");
 * V(h): Störmer–Verlet on ½|p|² + U(r): half kick, drift, half kick; on the sphere this is RATTLE, which
   keeps |r| = L and r·p = 0 to round-off (Andersen, J. Comput. Phys. 52, 24, 1983;
   Hairer, Lubich & Wanner, Geometric Numerical Integration, 2nd ed., §VII.1.4).
