@@ -37,8 +37,6 @@ from __future__ import annotations
 import math
 from typing import Callable, ClassVar
 
-import numpy as np
-
 from foucault_bench.integrators.fixed_step import FixedStepIntegrator, state_plus
 from foucault_bench.models import Model
 from foucault_bench.models.jit import jit

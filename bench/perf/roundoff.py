@@ -12,8 +12,9 @@ it where it is cheap). Minutes at most on one core; ``--quick`` stops at 10⁶ s
 
 from __future__ import annotations
 
+import dataclasses
 from functools import partial
-from typing import cast
+from typing import Callable, cast
 
 import numpy as np
 
@@ -41,18 +42,18 @@ def _cost_ratio(name: str, rounds: int) -> tuple[float, float, float]:
     h = 0.5 / params.pendulum_frequency_rad_s
     out = np.empty((COST_STEPS // 1000 + 1, 4))
     args = (params.initial_state(), params.parameter_vector(), h, COST_STEPS, 1000, out, False, np.empty((0, 3)), 1e6)
-    calls = {"compensated": partial(loop(integrator, True), *args), "plain": partial(loop(integrator, False), *args)}
+    calls: dict[str, Callable[[], object]] = {"compensated": partial(loop(integrator, True), *args),
+                                              "plain": partial(loop(integrator, False), *args)}
     times = interleaved(calls, rounds)
     return (median_ratio(times["compensated"], times["plain"]),
             float(np.median(times["compensated"])) / COST_STEPS * 1e9, float(np.median(times["plain"])) / COST_STEPS * 1e9)
 
 
 def run(quick: bool) -> tuple[list[Row], list[list], list[str]]:
-    sizes = dict(min_decade=3, max_decade=6, stride=100) if quick else dict(min_decade=4, max_decade=8, stride=1000)
-    config = RoundoffConfig(releases=RELEASES, **sizes)  # type: ignore[arg-type]
+    config = (RoundoffConfig(releases=RELEASES, min_decade=3, max_decade=6, stride=100) if quick
+              else RoundoffConfig(releases=RELEASES, min_decade=4, max_decade=8, stride=1000))
     frames = [roundoff_growth(config),
-              roundoff_growth(RoundoffConfig(integrators=tuple(_compensated_schemes()), releases=RELEASES,
-                                             compensated=False, **sizes))]  # type: ignore[arg-type]
+              roundoff_growth(dataclasses.replace(config, integrators=tuple(_compensated_schemes()), compensated=False))]
     decades = range(config.min_decade, config.max_decade + 1)
     headers = ["integrator", "summation", *[f"|ΔQ|/Q at 1e{d}" for d in decades], "exponent", "constant (ε)"]
     table, rows = [], []
