@@ -10,7 +10,12 @@ This module wraps it in one compiled loop that
   drift slope of the relative energy error (Welford's online covariance, stable over 10⁸ samples), and
   the turning points (maxima of the radius: r·ṙ changes sign from + to −, located on the cubic Hermite
   interpolant of the step; integrators/README.md "Measuring the precession rate");
-* stops at the first non-finite state or when the bob leaves a bound (diverged).
+* stops at the first non-finite state or when the bob leaves a bound (diverged);
+* adds a scheme's step to the state with compensated (Kahan) summation when the scheme supplies its step as an
+  increment (``FixedStepIntegrator.make_increment``): the rounding error of each addition is carried in a
+  compensation term and added back in the next step, so the state update contributes round-off like ε√n
+  instead of up to εn after n steps (Kahan, Comm. ACM 8, 40 (1965); Hairer, McLachlan & Razakarivony,
+  BIT 48, 231 (2008), §3).
 
 ``nfev`` is counted, not declared: the step's right-hand-side evaluations per step are counted once per model by a
 compiled run of the same step on a counting copy of the model (``integrators.counting``), and a run's ``nfev`` is
@@ -76,8 +81,57 @@ def _turning_point(x0, y0, vx0, vy0, x1, y1, vx1, vy1, h, radial0, radial1):
     return theta, px, py
 
 
-def build_kernel(step: Callable, energy: Callable) -> Callable:
-    """Compile the fixed-step loop around ``step`` with the model's ``energy`` for streamed metrics."""
+@jit(inline="always")
+def compensated_add(total, increment, compensation):
+    """``total`` + ``increment`` with compensated summation: (new total, new compensation). The compensation
+    holds what the previous additions rounded away; it is added to the increment first, and what this addition
+    rounds away becomes the new compensation (Kahan 1965, in the form of Hairer, McLachlan & Razakarivony,
+    BIT 48, 231 (2008), Algorithm 1)."""
+    compensation += increment
+    new_total = total + compensation
+    return new_total, compensation + (total - new_total)
+
+
+def state_plus(increment: Callable) -> Callable:
+    """The step ``(x, y, vx, vy, h, p) -> new state`` of a scheme given by its ``increment`` (plain sums)."""
+
+    @jit(inline="always")
+    def step(x, y, vx, vy, h, p):
+        dx, dy, dvx, dvy = increment(x, y, vx, vy, h, p)
+        return x + dx, y + dy, vx + dvx, vy + dvy
+
+    return step
+
+
+def _advance(step: Callable, increment: Callable | None) -> Callable:
+    """``(x, y, vx, vy, c, h, p) -> (x, y, vx, vy, c)``: one step, with the compensation tuple ``c`` of the
+    compensated sum when the scheme has an ``increment`` (``c`` stays zero, and is compiled away, otherwise)."""
+    if increment is None:
+
+        @jit(inline="always")
+        def plain(x, y, vx, vy, c, h, p):
+            xn, yn, vxn, vyn = step(x, y, vx, vy, h, p)
+            return xn, yn, vxn, vyn, c
+
+        return plain
+
+    @jit(inline="always")
+    def compensated(x, y, vx, vy, c, h, p):
+        dx, dy, dvx, dvy = increment(x, y, vx, vy, h, p)
+        cx, cy, cvx, cvy = c
+        xn, cx = compensated_add(x, dx, cx)
+        yn, cy = compensated_add(y, dy, cy)
+        vxn, cvx = compensated_add(vx, dvx, cvx)
+        vyn, cvy = compensated_add(vy, dvy, cvy)
+        return xn, yn, vxn, vyn, (cx, cy, cvx, cvy)
+
+    return compensated
+
+
+def build_kernel(step: Callable, energy: Callable, increment: Callable | None = None) -> Callable:
+    """Compile the fixed-step loop around ``step`` with the model's ``energy`` for streamed metrics; with the
+    scheme's ``increment`` the state is advanced by it with compensated summation (module docstring)."""
+    advance = _advance(step, increment)
 
     @jit
     def kernel(state0, parameter_vector, h, n_steps, stride, out, monitor, turning, radius_bound):
@@ -110,10 +164,11 @@ def build_kernel(step: Callable, energy: Callable) -> Callable:
         bound2 = radius_bound * radius_bound
         status = 0
         steps_done = 0
+        compensation = (0.0, 0.0, 0.0, 0.0)
         # one output row per ``stride`` steps: two nested loops, no modulo per step (as a C programmer writes it)
         for row in range(1, n_steps // stride + 1):
             for _ in range(stride):
-                xn, yn, vxn, vyn = step(x, y, vx, vy, h, p)
+                xn, yn, vxn, vyn, compensation = advance(x, y, vx, vy, compensation, h, p)
                 r2 = xn * xn + yn * yn
                 if not (r2 <= bound2) or not (abs(vxn) + abs(vyn) < 1.0e300):
                     status = 1
@@ -179,6 +234,12 @@ class FixedStepIntegrator(Integrator):
         """A numba function ``(x, y, vx, vy, h, p) -> (x, y, vx, vy)`` advancing the model's state by h (``p``:
         the parameter vector, passed by the loop as a tuple of floats; compile it with ``models.jit.jit``)."""
 
+    def make_increment(self, model: Model) -> Callable | None:
+        """For a scheme whose step is best written as an increment: a numba function ``(x, y, vx, vy, h, p) ->
+        (dx, dy, dvx, dvy)``, which the loop adds to the state with compensated summation (``None``: the loop
+        takes the new state from ``make_step``; such a scheme defines ``make_step`` as ``state_plus`` of it)."""
+        return None
+
     @functools.lru_cache(maxsize=None)
     def compiled_step(self, model: Model) -> Callable:
         """``make_step(model)``, built once per model (callable from Python too, e.g. to analyse one step)."""
@@ -187,7 +248,7 @@ class FixedStepIntegrator(Integrator):
     @functools.lru_cache(maxsize=None)
     def kernel(self, model: Model) -> Callable:
         """The compiled loop for this scheme and model (compiled on first use, cached on disk by numba)."""
-        return build_kernel(self.compiled_step(model), model.numba_energy)
+        return build_kernel(self.compiled_step(model), model.numba_energy, self.make_increment(model))
 
     @functools.lru_cache(maxsize=None)
     def evaluations_per_step(self, model: Model) -> float:

@@ -508,6 +508,19 @@ def _studies(builder: _Builder, studies: dict[str, pd.DataFrame]) -> None:
                        charts.long_time_energy, energy)
         builder.table(tables.long_time_summary(energy), "study_long_time_energy_summary",
                       "Long-time energy: error after the first hour and at the end")
+    roundoff = studies.get("study_long_time_roundoff")
+    if roundoff is not None:
+        from foucault_bench.reports.roundoff import roundoff_growth
+
+        builder.add(Heading("Long-time round-off"), Paragraph(
+            "On the linear model each symmetric scheme's one-step map conserves a quadratic form Q (the energy "
+            "for the Gauss-Legendre methods), so its drift is round-off alone (study `study_long_time_roundoff`, "
+            "bench.studies.long_time_roundoff; integrators/README.md \"Round-off over long runs\")."))
+        builder.curves("study_long_time_roundoff",
+                       f"|ΔQ|/Q against steps at kh = {roundoff['kh'].iloc[0]:g}: per integrator the median over "
+                       f"{int(roundoff['config_releases'].iloc[0])} random releases (bars: their range) and the "
+                       "fitted growth exponent; dashed: ε√n.",
+                       roundoff_growth, roundoff)
     stability = studies.get("study_stability")
     if stability is not None:
         builder.add(Heading("Stability"), Paragraph(

@@ -45,7 +45,8 @@ def test_c_loop_computes_the_numba_kernel_states(c_loops, model: str, scheme: st
 
 
 def test_every_built_in_fixed_step_scheme_has_a_c_reference() -> None:
-    """Each built-in fixed-step scheme has a C loop, or is listed as one without (a known gap, printed by perf)."""
+    """Each built-in fixed-step scheme has a C loop in loops.c, or is listed as one without (a known gap, printed
+    by perf)."""
     fixed_step = {name for name in built_in_names() if isinstance(get_integrator(name), FixedStepIntegrator)}
     assert fixed_step == set(SCHEMES) | set(WITHOUT_C_REFERENCE)
     assert not set(SCHEMES) & set(WITHOUT_C_REFERENCE)

@@ -17,9 +17,11 @@ from foucault_bench.bench.verdicts.pareto import pareto_front
 from foucault_bench.bench.studies import (
     LongTimeEnergyConfig,
     PrecessionLatitudeConfig,
+    RoundoffConfig,
     StabilitySweepConfig,
     long_time_energy,
     precession_vs_latitude,
+    roundoff_growth,
     stability_sweep,
 )
 from foucault_bench.reports import tables
@@ -96,6 +98,8 @@ def small_studies() -> dict[str, pd.DataFrame]:
         "study_stability": stability_sweep(StabilitySweepConfig(steps=200, kh=(0.5, 2.5, 3.5)), progress=False),
         "study_precession_latitude": precession_vs_latitude(PrecessionLatitudeConfig(
             duration_s=300.0, n_latitudes=5, amplitude_m=1.0), progress=False),
+        "study_long_time_roundoff": roundoff_growth(RoundoffConfig(integrators=("verlet", "implicit_midpoint"),
+                                                                   max_decade=4, releases=2)),
     }
 
 

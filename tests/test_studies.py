@@ -26,6 +26,7 @@ from foucault_bench.bench.studies import (
     precession_vs_release_azimuth,
     stability_sweep,
 )
+from foucault_bench.bench.studies.long_time_roundoff import RoundoffConfig
 from foucault_bench.integrators.fixed_step import uniform_output_stride
 from foucault_bench.integrators.registry import REGISTRY, built_in_names
 from foucault_bench.models import PendulumParameters
@@ -191,6 +192,7 @@ def test_ensure_studies_computes_missing_tables_once_and_reads_them_back() -> No
         "study_stability": StabilitySweepConfig(steps=20, kh=(0.5,)),
         "study_precession_latitude": PrecessionLatitudeConfig(duration_s=120.0, n_latitudes=3),
         "study_release_azimuth": ReleaseAzimuthConfig(latitudes_deg=(40.44,), azimuths_deg=(0.0,), duration_s=60.0),
+        "study_long_time_roundoff": RoundoffConfig(integrators=("verlet",), max_decade=4, releases=2),
     }
     store = _MemoryStore()
     first = ensure_studies(store, configs=small, progress=False)
@@ -215,6 +217,7 @@ def test_a_stored_study_of_another_version_is_recomputed() -> None:
         "study_precession_latitude": PrecessionLatitudeConfig(duration_s=120.0, n_latitudes=3),
         "study_release_azimuth": ReleaseAzimuthConfig(latitudes_deg=(40.44,), azimuths_deg=(0.0,), duration_s=60.0,
                                                       integrators=("verlet",)),
+        "study_long_time_roundoff": RoundoffConfig(integrators=("verlet",), max_decade=4, releases=2),
     }
     store = _MemoryStore()
     current = ensure_studies(store, configs=small, progress=False)

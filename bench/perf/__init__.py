@@ -19,6 +19,8 @@ Sections (one module each; each returns target rows and a detail table):
   against scikit-sundae's, ``bench.perf.cvode``; the compiled Runge-Kutta pairs against scipy's at equal
   nfev, ``bench.perf.erk``; heyoka's adapter against bare heyoka) and ``cpu_time_s`` at ``--jobs 2`` against
   ``--jobs 1``.
+* ``roundoff``: round-off growth of the symmetric schemes' invariant over 10⁸ steps, with and without
+  compensated summation, and its cost (``bench.studies.long_time_roundoff``);
 * ``startup``: ``--help`` of every command, and where a 5-run matrix's time goes (imports, validation,
   references, integration, store).
 
@@ -47,6 +49,7 @@ SECTIONS: dict[str, str] = {
     "matrices": "foucault_bench.bench.perf.matrices",
     "limits": "foucault_bench.bench.perf.limits",
     "startup": "foucault_bench.bench.perf.startup",
+    "roundoff": "foucault_bench.bench.perf.roundoff",
 }
 
 

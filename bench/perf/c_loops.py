@@ -26,12 +26,11 @@ C_SOURCE = Path(str(importlib.resources.files("foucault_bench.bench.perf").joinp
 """The C loops (package data, found as every data file is: ``importlib.resources``)."""
 C_FLAGS = ("-O3", "-march=native", "-ffp-contract=off", "-fno-tree-vectorize", "-fPIC", "-shared")
 MODELS = ("linear", "spherical")
-SCHEMES = ("explicit_euler", "symplectic_euler", "rk4", "heun3", "verlet", "yoshida4", "composition6", "boris",
-           "implicit_midpoint", "gauss_legendre4")
-WITHOUT_C_REFERENCE = ("nystrom4", "gbs4")
+SCHEMES = ("explicit_euler", "symplectic_euler", "rk4", "heun3", "nystrom4", "verlet", "yoshida4", "composition6",
+           "boris", "implicit_midpoint", "gauss_legendre4")
+WITHOUT_C_REFERENCE = ("gbs4",)
 """Built-in fixed-step schemes whose loop has no C twin in loops.c yet: ``perf`` cannot state their loop overhead
-(Nyström's method: its stages evaluate the acceleration at stage velocities; the fixed-order extrapolation
-``gbs4``: its midpoint lines)."""
+(the fixed-order extrapolation ``gbs4``: its midpoint lines)."""
 
 _DOUBLE_P = ctypes.POINTER(ctypes.c_double)
 _INT64_P = ctypes.POINTER(ctypes.c_int64)

@@ -4,12 +4,12 @@
  * models/base.py): every expression keeps the operand order of its Python twin, including the multiplications
  * by the zero velocities and zero rotation components that the one-source models carry, so that a C loop and
  * the numba kernel compute the same states (bitwise: neither contracts a*b+c into an FMA). The schemes
- * (integrators/methods/{explicit_euler,symplectic_euler,rk4,heun3,verlet,yoshida4,composition6,boris}.py,
+ * (integrators/methods/{explicit_euler,symplectic_euler,rk4,heun3,nystrom4,verlet,yoshida4,composition6,boris}.py,
  * integrators/explicit_rk.py, integrators/gauss.py) and the loop
  * (integrators/fixed_step.py) are written as a C programmer writes them for speed:
  *   - every loop invariant computed once before the loop (make_consts, <scheme>_setup): the parameters read
  *     into local scalars, sqrt(k2) for the Gauss solves, the Boris rotation's cosine and sine, and for the
- *     Verlet sequences each sub-step gamma_i h and each rotation, on the plane as a cosine and sine, on the
+ *     Verlet sequences each sub-step gamma_i h and each rotation, on the plane as tan(a/2) and sin a (three shears), on the
  *     sphere as a 3x3 matrix (R = cos a I + sin a [n]x + (1 - cos a) n n^T; 9 multiplications and 6 additions
  *     per rotation instead of Rodrigues' vector form's 18 and 12);
  *   - a composition (yoshida4: 3 Verlet sub-steps, composition6: 9) stays in the canonical variables from its
@@ -28,7 +28,6 @@
  * ingredients as the kernel (max relative energy error, Welford slope, turning points on the cubic Hermite
  * interpolant).
  */
-#include <float.h>
 #include <math.h>
 #include <stdint.h>
 
@@ -39,7 +38,7 @@ typedef struct {
     double k;                             /* sqrt(k2): the Gauss solves' norm */
     /* Verlet sequences (integrators/methods/verlet.py verlet_sequence): sub-steps gamma_i h and the merged rotations */
     double sub_h[MAX_SUB_STEPS];
-    double cos_r[MAX_SUB_STEPS + 1], sin_r[MAX_SUB_STEPS + 1]; /* plane: rotation by -c_i a h about z */
+    double tan_r[MAX_SUB_STEPS + 1], sin_r[MAX_SUB_STEPS + 1]; /* plane: rotation by -c_i a h about z (shears) */
     double rot[MAX_SUB_STEPS + 1][9];                          /* sphere: rotation by -c_i |w| h, row-major */
     double cos_boris, sin_boris;                               /* plane Boris: velocity turned by -2 a h */
 } consts;
@@ -77,7 +76,7 @@ static void sequence_setup(consts *k, double h, const double *gamma, int n) {
     for (int i = 0; i <= n; i++) {
         double c = i == 0 ? 0.5 * gamma[0] : (i == n ? 0.5 * gamma[n - 1] : 0.5 * (gamma[i - 1] + gamma[i]));
         double angle = -c * k->wz * h;
-        k->cos_r[i] = cos(angle);
+        k->tan_r[i] = tan(0.5 * angle);
         k->sin_r[i] = sin(angle);
         rotation_matrix(k, c, h, k->rot[i]);
     }
@@ -103,6 +102,7 @@ static void boris_setup(consts *k, double h) {
 #define symplectic_euler_setup no_setup
 #define rk4_setup no_setup
 #define heun3_setup no_setup
+#define nystrom4_setup no_setup
 #define implicit_midpoint_setup no_setup
 #define gauss_legendre4_setup no_setup
 
@@ -232,6 +232,24 @@ DEFINE_KICK(spherical, k->wx, k->wy)
         *py = y + quarter * (vy + 3.0 * vy3);                                                                 \
         *pvx = vx + quarter * (k1ax + 3.0 * k3ax);                                                            \
         *pvy = vy + quarter * (k1ay + 3.0 * k3ay);                                                            \
+    }                                                                                                         \
+    /* integrators/methods/nystrom4.py: the general Runge-Kutta-Nystrom method, stages at stage velocities */ \
+    static inline void model##_nystrom4_step(const consts *k, double h, double *px, double *py, double *pvx, \
+                                             double *pvy) {                                                  \
+        double x = *px, y = *py, vx = *pvx, vy = *pvy, half = 0.5 * h, eighth_h2 = 0.125 * h * h;            \
+        double k1x, k1y, k2x, k2y, k3x, k3y, k4x, k4y;                                                        \
+        model##_acceleration(k, x, y, vx, vy, &k1x, &k1y);                                                    \
+        double x2 = x + half * vx + eighth_h2 * k1x, y2 = y + half * vy + eighth_h2 * k1y;                    \
+        model##_acceleration(k, x2, y2, vx + half * k1x, vy + half * k1y, &k2x, &k2y);                        \
+        model##_acceleration(k, x2, y2, vx + half * k2x, vy + half * k2y, &k3x, &k3y);                        \
+        double half_h2 = 0.5 * h * h;                                                                         \
+        model##_acceleration(k, x + h * vx + half_h2 * k3x, y + h * vy + half_h2 * k3y, vx + h * k3x,         \
+                             vy + h * k3y, &k4x, &k4y);                                                       \
+        double sixth_h2 = h * h / 6.0, sixth = h / 6.0;                                                       \
+        *px = x + h * vx + sixth_h2 * (k1x + k2x + k3x);                                                      \
+        *py = y + h * vy + sixth_h2 * (k1y + k2y + k3y);                                                      \
+        *pvx = vx + sixth * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);                                              \
+        *pvy = vy + sixth * (k1y + 2.0 * k2y + 2.0 * k3y + k4y);                                              \
     }
 DEFINE_RUNGE_KUTTA_STEPS(linear)
 DEFINE_RUNGE_KUTTA_STEPS(spherical)
@@ -239,14 +257,22 @@ DEFINE_RUNGE_KUTTA_STEPS(spherical)
 /* ---- Verlet sequences (integrators/methods/verlet.py verlet_sequence): Verlet, yoshida4, composition6 ---- */
 
 /* plane: canonical p = v + a z x r; per sub-step the merged rotation then kick, drift, kick */
+/* verlet.py _plane_parts turn: the rotation as three shears of r and their inverse transposes on p */
+static inline void shear_turn(double t, double s, double *x, double *y, double *px, double *py) {
+    *x -= t * *y;
+    *py += t * *px;
+    *y += s * *x;
+    *px -= s * *py;
+    *x -= t * *y;
+    *py += t * *px;
+}
+
 static inline void linear_sequence(const consts *k, int n, double *x_, double *y_, double *vx_, double *vy_) {
-    double a = k->wz, x = *x_, y = *y_, t, c, s, fx, fy, fz;
+    double a = k->wz, x = *x_, y = *y_, fx, fy, fz;
     double px = *vx_ - a * y, py = *vy_ + a * x;
     for (int i = 0; i < n; i++) {
         double h = k->sub_h[i];
-        c = k->cos_r[i]; s = k->sin_r[i];
-        t = c * x - s * y; y = s * x + c * y; x = t;
-        t = c * px - s * py; py = s * px + c * py; px = t;
+        shear_turn(k->tan_r[i], k->sin_r[i], &x, &y, &px, &py);
         linear_kick(k, x, y, 0.0, &fx, &fy, &fz);
         px += 0.5 * h * fx;
         py += 0.5 * h * fy;
@@ -256,9 +282,7 @@ static inline void linear_sequence(const consts *k, int n, double *x_, double *y
         px = px + 0.5 * h * fx;
         py = py + 0.5 * h * fy;
     }
-    c = k->cos_r[n]; s = k->sin_r[n];
-    t = c * x - s * y; y = s * x + c * y; x = t;
-    t = c * px - s * py; py = s * px + c * py; px = t;
+    shear_turn(k->tan_r[n], k->sin_r[n], &x, &y, &px, &py);
     *x_ = x;
     *y_ = y;
     *vx_ = px + a * y;
@@ -402,33 +426,26 @@ static inline void spherical_boris_step(const consts *k, double h, double *x_, d
 
 /* ---- Gauss-Legendre collocation, fixed-point solve to round-off (integrators/gauss.py) ---- */
 
-#define HALF_ULP (0.5 * DBL_EPSILON)
 #define STALL_SWEEPS 8
 #define CONVERGED_INCREMENT 1.0e-12
 #define DIVERGED_INCREMENT 1.0e3
 #define MAX_SWEEPS 100000
 #define SQRT3 1.7320508075688772 /* math.sqrt(3.0) */
-#define A11 0.25
-#define A12 (0.25 - SQRT3 / 6.0)
-#define A21 (0.25 + SQRT3 / 6.0)
-#define A22 0.25
+#define GAUSS2_S (SQRT3 / 6.0)
 
 static inline double squared_norm(double dx, double dy, double dvx, double dvy, double k) {
     return k * k * (dx * dx + dy * dy) + dvx * dvx + dvy * dvy;
 }
 
 /* gauss.py _sweep_verdict: 1 when the iteration is done; *converged says how */
-static inline int sweep_verdict(double increment, double previous, double *smallest, int *stalled, int *converged) {
+static inline int sweep_verdict(double increment, double *smallest, int *stalled, int *converged) {
     if (increment < *smallest) {
         *smallest = increment;
         *stalled = 0;
     } else {
         (*stalled)++;
     }
-    double contraction = increment / previous;
-    double remaining = (0.0 < contraction && contraction < 1.0) ? increment * contraction / (1.0 - contraction)
-                                                                : INFINITY;
-    if (increment == 0.0 || remaining <= HALF_ULP || (*stalled >= STALL_SWEEPS && *smallest <= CONVERGED_INCREMENT)) {
+    if (increment == 0.0 || (*stalled >= STALL_SWEEPS && *smallest <= CONVERGED_INCREMENT)) {
         *converged = 1;
         return 1;
     }
@@ -436,14 +453,23 @@ static inline int sweep_verdict(double increment, double previous, double *small
     return increment > DIVERGED_INCREMENT;
 }
 
+/* integrators/fixed_step.py compensated_add: *total += increment, with the compensation *c (Kahan) */
+static inline void compensated_add(double *total, double increment, double *c) {
+    *c += increment;
+    double new_total = *total + *c;
+    *c = *c + (*total - new_total);
+    *total = new_total;
+}
+
+/* the increments h sum b_i f(Y_i), added by the loop with compensated summation (gauss.py make_increment) */
 #define DEFINE_GAUSS_STEPS(model)                                                                             \
-    static inline void model##_implicit_midpoint_step(const consts *k, double h, double *x_, double *y_,     \
-                                                      double *vx_, double *vy_) {                            \
-        double x = *x_, y = *y_, vx = *vx_, vy = *vy_, ax, ay, kk = k->k;                                     \
+    static inline void model##_implicit_midpoint_increment(const consts *k, double h, double x, double y,    \
+                                                           double vx, double vy, double *d) {                \
+        double ax, ay, kk = k->k;                                                                             \
         model##_acceleration(k, x, y, vx, vy, &ax, &ay);                                                      \
         double scale = kk * (fabs(x) + fabs(y)) + fabs(vx) + fabs(vy) + 1e-300;                               \
         double zx = 0.5 * h * vx, zy = 0.5 * h * vy, zvx = 0.5 * h * ax, zvy = 0.5 * h * ay;                  \
-        double smallest = INFINITY, previous = INFINITY;                                                      \
+        double smallest = INFINITY;                                                                           \
         int stalled = 0, converged = 0;                                                                       \
         for (int sweep = 0; sweep < MAX_SWEEPS; sweep++) {                                                    \
             double mvx = vx + zvx, mvy = vy + zvy, max_, may;                                                 \
@@ -451,45 +477,45 @@ static inline int sweep_verdict(double increment, double previous, double *small
             double nx = 0.5 * h * mvx, ny = 0.5 * h * mvy, nvx = 0.5 * h * max_, nvy = 0.5 * h * may;         \
             double increment = sqrt(squared_norm(nx - zx, ny - zy, nvx - zvx, nvy - zvy, kk)) / scale;         \
             zx = nx; zy = ny; zvx = nvx; zvy = nvy;                                                           \
-            if (sweep_verdict(increment, previous, &smallest, &stalled, &converged)) break;                   \
-            previous = increment;                                                                             \
+            if (sweep_verdict(increment, &smallest, &stalled, &converged)) break;                             \
         }                                                                                                     \
-        if (!converged) { *x_ = *y_ = *vx_ = *vy_ = NAN; return; }                                            \
-        *x_ = x + 2.0 * zx;                                                                                   \
-        *y_ = y + 2.0 * zy;                                                                                   \
-        *vx_ = vx + 2.0 * zvx;                                                                                \
-        *vy_ = vy + 2.0 * zvy;                                                                                \
+        if (!converged) { d[0] = d[1] = d[2] = d[3] = NAN; return; }                                          \
+        double fx, fy;                                                                                        \
+        model##_acceleration(k, x + zx, y + zy, vx + zvx, vy + zvy, &fx, &fy);                                \
+        d[0] = h * (vx + zvx);                                                                                \
+        d[1] = h * (vy + zvy);                                                                                \
+        d[2] = h * fx;                                                                                        \
+        d[3] = h * fy;                                                                                        \
     }                                                                                                         \
-    static inline void model##_gauss_legendre4_step(const consts *k, double h, double *x_, double *y_,       \
-                                                    double *vx_, double *vy_) {                              \
-        double x = *x_, y = *y_, vx = *vx_, vy = *vy_, ax, ay, kk = k->k;                                     \
+    static inline void model##_gauss_legendre4_increment(const consts *k, double h, double x, double y,      \
+                                                         double vx, double vy, double *d) {                  \
+        double ax, ay, kk = k->k, s = GAUSS2_S;                                                               \
         model##_acceleration(k, x, y, vx, vy, &ax, &ay);                                                      \
         double scale = kk * (fabs(x) + fabs(y)) + fabs(vx) + fabs(vy) + 1e-300;                               \
         double k1x = vx, k1y = vy, k1vx = ax, k1vy = ay, k2x = vx, k2y = vy, k2vx = ax, k2vy = ay;            \
-        double smallest = INFINITY, previous = INFINITY;                                                      \
+        double smallest = INFINITY;                                                                           \
         int stalled = 0, converged = 0;                                                                       \
         for (int sweep = 0; sweep < MAX_SWEEPS; sweep++) {                                                    \
-            double u1x = vx + h * (A11 * k1vx + A12 * k2vx), u1y = vy + h * (A11 * k1vy + A12 * k2vy);        \
-            double u2x = vx + h * (A21 * k1vx + A22 * k2vx), u2y = vy + h * (A21 * k1vy + A22 * k2vy);        \
+            double qx = 0.25 * (k1x + k2x), qy = 0.25 * (k1y + k2y);                                          \
+            double qvx = 0.25 * (k1vx + k2vx), qvy = 0.25 * (k1vy + k2vy);                                    \
+            double u1x = vx + h * (qvx - s * k2vx), u1y = vy + h * (qvy - s * k2vy);                          \
+            double u2x = vx + h * (qvx + s * k1vx), u2y = vy + h * (qvy + s * k1vy);                          \
             double b1x, b1y, b2x, b2y;                                                                        \
-            model##_acceleration(k, x + h * (A11 * k1x + A12 * k2x), y + h * (A11 * k1y + A12 * k2y), u1x,    \
-                                 u1y, &b1x, &b1y);                                                            \
-            model##_acceleration(k, x + h * (A21 * k1x + A22 * k2x), y + h * (A21 * k1y + A22 * k2y), u2x,    \
-                                 u2y, &b2x, &b2y);                                                            \
+            model##_acceleration(k, x + h * (qx - s * k2x), y + h * (qy - s * k2y), u1x, u1y, &b1x, &b1y);    \
+            model##_acceleration(k, x + h * (qx + s * k1x), y + h * (qy + s * k1y), u2x, u2y, &b2x, &b2y);    \
             double increment = sqrt(                                                                          \
                 squared_norm(h * (u1x - k1x), h * (u1y - k1y), h * (b1x - k1vx), h * (b1y - k1vy), kk) +          \
                 squared_norm(h * (u2x - k2x), h * (u2y - k2y), h * (b2x - k2vx), h * (b2y - k2vy), kk)) / scale;  \
             k1x = u1x; k1y = u1y; k1vx = b1x; k1vy = b1y;                                                     \
             k2x = u2x; k2y = u2y; k2vx = b2x; k2vy = b2y;                                                     \
-            if (sweep_verdict(increment, previous, &smallest, &stalled, &converged)) break;                   \
-            previous = increment;                                                                             \
+            if (sweep_verdict(increment, &smallest, &stalled, &converged)) break;                             \
         }                                                                                                     \
-        if (!converged) { *x_ = *y_ = *vx_ = *vy_ = NAN; return; }                                            \
+        if (!converged) { d[0] = d[1] = d[2] = d[3] = NAN; return; }                                          \
         double half = 0.5 * h;                                                                                \
-        *x_ = x + half * (k1x + k2x);                                                                         \
-        *y_ = y + half * (k1y + k2y);                                                                         \
-        *vx_ = vx + half * (k1vx + k2vx);                                                                     \
-        *vy_ = vy + half * (k1vy + k2vy);                                                                     \
+        d[0] = half * (k1x + k2x);                                                                            \
+        d[1] = half * (k1y + k2y);                                                                            \
+        d[2] = half * (k1vx + k2vx);                                                                          \
+        d[3] = half * (k1vy + k2vy);                                                                          \
     }
 DEFINE_GAUSS_STEPS(linear)
 DEFINE_GAUSS_STEPS(spherical)
@@ -524,6 +550,31 @@ static void turning_point(double x0, double y0, double vx0, double vy0, double x
 
 /* ---- the loops (integrators/fixed_step.py build_kernel) ---- */
 
+/* fixed_step.py _advance: a step in place, or an increment added with compensated summation */
+#define PLAIN_ADVANCE(model, scheme)                                                                          \
+    static inline void model##_##scheme##_advance(const consts *k, double h, double *c, double *x, double *y,\
+                                                  double *vx, double *vy) {                                  \
+        (void)c;                                                                                              \
+        model##_##scheme##_step(k, h, x, y, vx, vy);                                                          \
+    }
+#define COMPENSATED_ADVANCE(model, scheme)                                                                    \
+    static inline void model##_##scheme##_advance(const consts *k, double h, double *c, double *x, double *y,\
+                                                  double *vx, double *vy) {                                  \
+        double d[4];                                                                                          \
+        model##_##scheme##_increment(k, h, *x, *y, *vx, *vy, d);                                              \
+        compensated_add(x, d[0], &c[0]);                                                                      \
+        compensated_add(y, d[1], &c[1]);                                                                      \
+        compensated_add(vx, d[2], &c[2]);                                                                     \
+        compensated_add(vy, d[3], &c[3]);                                                                     \
+    }
+#define PLAIN_ADVANCES(model)                                                                                 \
+    PLAIN_ADVANCE(model, explicit_euler) PLAIN_ADVANCE(model, symplectic_euler) PLAIN_ADVANCE(model, rk4)    \
+    PLAIN_ADVANCE(model, heun3) PLAIN_ADVANCE(model, nystrom4) PLAIN_ADVANCE(model, verlet)                  \
+    PLAIN_ADVANCE(model, yoshida4) PLAIN_ADVANCE(model, composition6) PLAIN_ADVANCE(model, boris)            \
+    COMPENSATED_ADVANCE(model, implicit_midpoint) COMPENSATED_ADVANCE(model, gauss_legendre4)
+PLAIN_ADVANCES(linear)
+PLAIN_ADVANCES(spherical)
+
 #define DIVERGED(xn, yn, vxn, vyn) (!((xn) * (xn) + (yn) * (yn) <= bound2) || !(fabs(vxn) + fabs(vyn) < 1.0e300))
 
 #define DEFINE_LOOPS(model, scheme)                                                                           \
@@ -533,12 +584,13 @@ static void turning_point(double x0, double y0, double vx0, double vy0, double x
         scheme##_setup(&k, h);                                                                                \
         const double bound2 = radius_bound * radius_bound;                                                    \
         double x = state0[0], y = state0[1], vx = state0[2], vy = state0[3];                                  \
+        double comp[4] = {0.0, 0.0, 0.0, 0.0}; /* the compensated sum's carries (COMPENSATED_ADVANCE) */       \
         out[0] = x; out[1] = y; out[2] = vx; out[3] = vy;                                                     \
         int64_t done = 0;                                                                                     \
         for (int64_t row = 1; row <= n_steps / stride; row++) {                                               \
             for (int64_t j = 0; j < stride; j++) {                                                            \
                 double xn = x, yn = y, vxn = vx, vyn = vy;                                                    \
-                model##_##scheme##_step(&k, h, &xn, &yn, &vxn, &vyn);                                         \
+                model##_##scheme##_advance(&k, h, comp, &xn, &yn, &vxn, &vyn);                                         \
                 if (DIVERGED(xn, yn, vxn, vyn)) { *steps_done = done; return 1; }                             \
                 done++;                                                                                       \
                 x = xn; y = yn; vx = vxn; vy = vyn;                                                           \
@@ -556,6 +608,7 @@ static void turning_point(double x0, double y0, double vx0, double vy0, double x
         scheme##_setup(&k, h);                                                                                \
         const double bound2 = radius_bound * radius_bound;                                                    \
         double x = state0[0], y = state0[1], vx = state0[2], vy = state0[3];                                  \
+        double comp[4] = {0.0, 0.0, 0.0, 0.0}; /* the compensated sum's carries (COMPENSATED_ADVANCE) */       \
         out[0] = x; out[1] = y; out[2] = vx; out[3] = vy;                                                     \
         const double energy0 = model##_energy(&k, x, y, vx, vy);                                              \
         const double swing = energy0 - model##_energy(&k, 0.0, 0.0, 0.0, 0.0);                               \
@@ -567,7 +620,7 @@ static void turning_point(double x0, double y0, double vx0, double vy0, double x
         for (int64_t row = 1; row <= n_steps / stride && !status; row++) {                                    \
             for (int64_t j = 0; j < stride; j++) {                                                            \
                 double xn = x, yn = y, vxn = vx, vyn = vy;                                                    \
-                model##_##scheme##_step(&k, h, &xn, &yn, &vxn, &vyn);                                         \
+                model##_##scheme##_advance(&k, h, comp, &xn, &yn, &vxn, &vyn);                                         \
                 if (DIVERGED(xn, yn, vxn, vyn)) { status = 1; break; }                                        \
                 i++;                                                                                          \
                 done = i;                                                                                     \
@@ -605,6 +658,7 @@ DEFINE_LOOPS(linear, explicit_euler)
 DEFINE_LOOPS(linear, symplectic_euler)
 DEFINE_LOOPS(linear, rk4)
 DEFINE_LOOPS(linear, heun3)
+DEFINE_LOOPS(linear, nystrom4)
 DEFINE_LOOPS(linear, verlet)
 DEFINE_LOOPS(linear, yoshida4)
 DEFINE_LOOPS(linear, composition6)
@@ -615,6 +669,7 @@ DEFINE_LOOPS(spherical, explicit_euler)
 DEFINE_LOOPS(spherical, symplectic_euler)
 DEFINE_LOOPS(spherical, rk4)
 DEFINE_LOOPS(spherical, heun3)
+DEFINE_LOOPS(spherical, nystrom4)
 DEFINE_LOOPS(spherical, verlet)
 DEFINE_LOOPS(spherical, yoshida4)
 DEFINE_LOOPS(spherical, composition6)

@@ -2,7 +2,7 @@
 
 Each study is one function of a frozen config dataclass (sizes are fields, so a test can run a small one) and
 returns a DataFrame; ``reports`` only reads and plots these frames. One module per study (``energy``,
-``stability``, ``precession``, ``seed``), what they share (``common``: running an integrator at a setting,
+``stability``, ``precession``, ``seed``, ``long_time_roundoff``), what they share (``common``: running an integrator at a setting,
 choosing integrators from their declared facts), and the stored ones (``stored``: ``STUDIES``,
 ``ensure_studies``). This package re-exports their public names.
 
@@ -17,6 +17,7 @@ from foucault_bench.bench.studies.common import (
 from foucault_bench.bench.studies.energy import (
     BOUNDED_BELOW_EXPONENT, GROWING_ABOVE_EXPONENT, LongTimeEnergyConfig, energy_trends, long_time_energy,
 )
+from foucault_bench.bench.studies.long_time_roundoff import RoundoffConfig, roundoff_growth
 from foucault_bench.bench.studies.precession import (
     MIDPOINT_INTEGRATOR, PrecessionLatitudeConfig, ReleaseAzimuthConfig, midpoint_precession_law,
     precession_vs_latitude, precession_vs_release_azimuth,
@@ -27,9 +28,9 @@ from foucault_bench.bench.studies.stored import STUDIES, STUDY_VERSION_COLUMN, S
 
 __all__ = [
     "BOUNDED_BELOW_EXPONENT", "GROWING_ABOVE_EXPONENT", "LongTimeEnergyConfig", "MIDPOINT_INTEGRATOR",
-    "PrecessionLatitudeConfig", "ReleaseAzimuthConfig", "STUDIES", "STUDY_VERSION_COLUMN", "SeedConfig", "SeedStudy",
+    "PrecessionLatitudeConfig", "ReleaseAzimuthConfig", "RoundoffConfig", "STUDIES", "STUDY_VERSION_COLUMN", "SeedConfig", "SeedStudy",
     "StabilitySweepConfig", "Study", "centrifugal_check", "energy_trends", "ensure_studies",
     "family_representatives", "long_time_energy", "midpoint_precession_law", "precession_vs_latitude",
-    "precession_vs_release_azimuth", "relative_energy_error", "seed_revisited", "solve_with_setting",
+    "precession_vs_release_azimuth", "relative_energy_error", "roundoff_growth", "seed_revisited", "solve_with_setting",
     "stability_sweep", "stored_version", "structure_preserving_integrators", "study_setting_label",
 ]

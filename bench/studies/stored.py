@@ -9,6 +9,7 @@ from typing import Callable, Protocol
 import pandas as pd
 
 from foucault_bench.bench.studies.energy import LongTimeEnergyConfig, long_time_energy
+from foucault_bench.bench.studies.long_time_roundoff import RoundoffConfig, roundoff_growth
 from foucault_bench.bench.studies.precession import (
     PrecessionLatitudeConfig, ReleaseAzimuthConfig, precession_vs_latitude, precession_vs_release_azimuth,
 )
@@ -38,6 +39,7 @@ STUDIES: dict[str, Study] = {
         Study("study_precession_latitude", precession_vs_latitude, PrecessionLatitudeConfig()),
         # version 2: kh is the step taken (kh_requested the configured one); no rk4
         Study("study_release_azimuth", precession_vs_release_azimuth, ReleaseAzimuthConfig(), version=2),
+        Study("study_long_time_roundoff", roundoff_growth, RoundoffConfig()),
     )
 }
 
