@@ -24,7 +24,7 @@ from tqdm import tqdm
 
 from foucault_bench.reports import chart_style, interactive, tables
 from foucault_bench.reports.document import Block, Figure, Page, Paragraph, Table, write_table_files
-from foucault_bench.reports.figure_cache import FigureCache, digest
+from foucault_bench.reports.figure_cache import FigureCache, Unhashable, digest
 
 if TYPE_CHECKING:
     from plotly.graph_objects import Figure as PlotlyFigure
@@ -154,9 +154,13 @@ class Builder:
     def later(self, what: str, draw: Callable[[], list[Block]], long: bool = False, key: object = None) -> None:
         """Keep a place for the blocks ``draw()`` returns (figures, which ``draw_figures`` draws in parallel);
         ``what`` names them in the progress bar; ``long`` starts them first; ``key``: everything the blocks
-        depend on (hashed with the drawing code's version), or ``None`` to draw them on every build."""
-        self.pending.append(_Pending(self.current, len(self.current.blocks), what, draw,
-                                     None if key is None else digest((what, key), self.folder), long))
+        depend on (hashed with the drawing code's version), or ``None`` to draw them on every build (as when
+        ``key`` holds a lambda or a closure, whose captured data the hash cannot see)."""
+        try:
+            found = None if key is None else digest((what, key), self.folder)
+        except Unhashable:
+            found = None
+        self.pending.append(_Pending(self.current, len(self.current.blocks), what, draw, found, long))
         self.current.blocks.append(Paragraph(""))
 
     def figure(self, name: str, caption: str, draw: Callable[[Path], Path],

@@ -47,6 +47,11 @@ def code_version() -> str:
     return sha.hexdigest()
 
 
+class Unhashable(TypeError):
+    """A figure input the key cannot see through (a lambda, a closure, an object of unknown kind): the figure
+    is drawn on every build."""
+
+
 def _feed(sha, value: object, folder: Path) -> None:
     """Hash ``value`` into ``sha`` by what it holds (paths relative to ``folder``: the staging folder's name
     changes from build to build)."""
@@ -76,15 +81,19 @@ def _feed(sha, value: object, folder: Path) -> None:
         sha.update(b"path" + (value.relative_to(folder).as_posix() if value.is_relative_to(folder)
                               else str(value)).encode())
     elif callable(value):
-        sha.update(f"callable {value.__module__}.{value.__qualname__}".encode())
+        name = getattr(value, "__qualname__", "<unnamed>")
+        if getattr(value, "__closure__", None) or "<" in name:  # what a closure or lambda reads is not seen
+            raise Unhashable(f"{name} is not a module-level function")
+        sha.update(f"callable {value.__module__}.{name}".encode())
     elif isinstance(value, (np.generic, float, int, str, bool, bytes)) or value is None:
         sha.update(f"{type(value).__name__} {value!r}".encode())
     else:
-        raise TypeError(f"cannot hash a {type(value).__name__} as a figure input")
+        raise Unhashable(f"cannot hash a {type(value).__name__} as a figure input")
 
 
 def digest(value: object, folder: Path) -> str:
-    """The key of a figure whose drawing reads ``value`` (module docstring)."""
+    """The key of a figure whose drawing reads ``value`` (module docstring); ``Unhashable`` when ``value`` holds
+    something whose content the key cannot see."""
     sha = hashlib.sha256(code_version().encode())
     _feed(sha, value, folder)
     return sha.hexdigest()

@@ -11,6 +11,7 @@ page in order, ``document.render_markdown``) and the reference notes they cite.
 
 from __future__ import annotations
 
+import hashlib
 import html
 from pathlib import Path
 from typing import cast
@@ -48,6 +49,7 @@ table.data .text { text-align: left; max-width: 32em; overflow-wrap: break-word;
 details.long-table > summary { cursor: pointer; }
 details.long-table input { margin: 0.5em 0.5em 0.5em 0; }
 .notes { font-size: 0.85em; color: #444; }
+nav { display: flex; flex-wrap: wrap; gap: 0 1.2em; } nav ul.pages { font-weight: 600; }
 nav ul { display: flex; flex-wrap: wrap; gap: 0.2em 1.2em; list-style: none; padding: 0; font-size: 0.85em;
   margin: 0.3em 0; }
 div.chart { width: 100%; min-height: 520px; border: 1px solid #ddd; }
@@ -97,10 +99,10 @@ BESIDE_CHART_HEIGHT_PX = 440
 
 
 def _interactive_html(block: Figure) -> str:
-    """A plotly chart: its div (``data-points``: the markers it should draw; its id unique in the report, from its
-    file stem) and the script drawing it (a chart beside a table ``BESIDE_CHART_HEIGHT_PX`` high, in a smaller
+    """A plotly chart: its div (``data-points``: the markers it should draw; its id unique in the report, a hash
+    of its file stem) and the script drawing it (a chart beside a table ``BESIDE_CHART_HEIGHT_PX`` high, in a smaller
     font)."""
-    chart_id = "chart-" + block.stem.rsplit("/", 1)[-1]
+    chart_id = "chart-" + hashlib.sha256(block.stem.encode()).hexdigest()[:16]  # never markup, whatever the name
     layout = f"Object.assign(figure.layout, {{height: {BESIDE_CHART_HEIGHT_PX}, font: {{size: 10}}}})" if block.beside else "figure.layout"
     static = (f" (static: <a href='{_attribute(_url(block.stem + '.png'))}'>PNG</a>, "
               f"<a href='{_attribute(_url(block.stem + '.svg'))}'>SVG</a>)") if block.static else ""
@@ -156,6 +158,7 @@ def render_html(title: str, blocks: list[Block], pages: list[tuple[str, str]] = 
                   for i, b in enumerate(blocks) if isinstance(b, Heading) and b.level == 2)
     page_links = "".join(f"<li><strong>{html.escape(name)}</strong></li>" if file == current else
                          f"<li><a href='{_attribute(_url(file))}'>{html.escape(name)}</a></li>" for file, name in pages)
+    bar = f"<ul class='pages'>{page_links}</ul>" if pages else ""
     head = ""
     if any(isinstance(block, Figure) and block.interactive for block in blocks):
         from foucault_bench.reports.interactive import LEGEND_SCRIPT, PLOTLY_JS
@@ -165,7 +168,7 @@ def render_html(title: str, blocks: list[Block], pages: list[tuple[str, str]] = 
         head += f"<script>{_FILTER_SCRIPT}</script>"
     parts = [f"<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
              f"<style>{_STYLE}</style>{head}</head><body>", f"<h1>{html.escape(title)}</h1>",
-             *([f"<nav class='pages'><ul>{page_links}</ul></nav>"] if pages else []), f"<nav><ul>{toc}</ul></nav>"]
+             f"<nav>{bar}<ul>{toc}</ul></nav>"]
     for index, block in enumerate(blocks):
         rendered: list[str] = []
         if isinstance(block, Heading):

@@ -34,8 +34,8 @@ def kill_self():
 """
 
 KILL_BEFORE_MARKDOWN = KILL_SELF + """
-import foucault_bench.reports.document as document
-document.render_markdown = lambda *args, **kwargs: kill_self()
+import foucault_bench.reports.html_page as html_page
+html_page.render_markdown = lambda *args, **kwargs: kill_self()
 """
 """index.html and plotly.min.js are written, REPORT.md is not (the half-written report of the issue)."""
 

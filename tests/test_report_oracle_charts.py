@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from report_fixture import INLINE_SCENE
+from report_fixture import INLINE_SCENE, report_html
 
 VERDICT_WORDS = {"reference_error": "reference error", "energy_max_rel_error": "energy error",
                  "energy_drift_per_s": "energy drift", "precession_rate_ref_error": "precession-rate error",
@@ -67,8 +67,9 @@ class Chart:
 
 
 def page_charts(folder: Path) -> dict[str, Chart]:
-    """Every chart of index.html by its static file's stem (``figures/NAME``)."""
-    html = (folder / "index.html").read_text(encoding="utf-8")
+    """Every chart of the report's pages (``report_fixture.report_html``) by its static file's stem
+    (``figures/NAME``)."""
+    html = report_html(folder)
     found = {}
     for stem, block in re.findall(r"<figure(?: id='[^']+' data-stem='([^']+)')?>(.*?)</figure>", html, re.S):
         data = re.search(r"var figure = (.*?); Plotly\.newPlot", block, re.S)
