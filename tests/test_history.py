@@ -294,7 +294,7 @@ def test_a_report_of_a_database_of_several_revisions_links_its_history_page(hist
 
     seen = {}
 
-    def overview_only(inputs, folder, progress=False):
+    def overview_only(inputs, folder, progress=False, previous=None):
         seen["revisions"] = inputs.revisions
         builder = Builder(folder, False, False)
         overview(builder, inputs)

@@ -289,7 +289,7 @@ def test_a_scene_where_every_run_failed_still_draws_and_tabulates(tmp_path: Path
 
 
 def test_the_report_says_how_each_family_s_cost_was_measured() -> None:
-    from foucault_bench.reports.build import cost_basis_sentences
+    from foucault_bench.reports.result_sections import cost_basis_sentences
 
     runs = pd.DataFrame({"family": ["runge-kutta", "runge-kutta", "multistep"],
                          "integrator": ["dopri5", "scipy_rk45", "cvode_bdf_py"]})
