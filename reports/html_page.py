@@ -14,7 +14,7 @@ from __future__ import annotations
 import hashlib
 import html
 from pathlib import Path
-from typing import cast
+from typing import Sequence, cast
 
 from foucault_bench.reports.document import (
     Block,
@@ -150,7 +150,8 @@ def _details_table(block: Table) -> str:
     return "\n".join(out)
 
 
-def render_html(title: str, blocks: list[Block], pages: list[tuple[str, str]] = (), current: str = "index.html") -> str:
+def render_html(title: str, blocks: list[Block], pages: Sequence[tuple[str, str]] = (),
+                current: str = "index.html") -> str:
     """One HTML page of ``blocks``; ``pages``: (file, title) of every page of the report, linked at the top (the
     page ``current`` shown as the one open)."""
     anchors = _anchors(blocks)
