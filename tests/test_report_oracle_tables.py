@@ -12,6 +12,7 @@ a tag, no attribute or element injected into the page.
 from __future__ import annotations
 
 import math
+import json
 import re
 from html.parser import HTMLParser
 from pathlib import Path
@@ -33,8 +34,10 @@ from report_fixture import (
     FAILED_MESSAGE,
     FAILED_WITH_COST_MESSAGE,
     INLINE_SCENE,
+    SCENE_NAMES,
     fixture_adequacy,
     report_html,
+    report_pages,
 )
 
 INJECTION = "q' onmouseover='alert(5)' x='"
@@ -470,3 +473,37 @@ def test_the_convergence_notes_say_what_was_fitted() -> None:
 
     assert "over the ok runs" not in COLUMN_NOTES["fitted_order"] and "saturated" in COLUMN_NOTES["fitted_order"]
     assert "used" in COLUMN_NOTES["points"]
+
+
+def test_each_scene_page_shows_that_scene_s_rows_only(fixture_report: Path, fixture_database: Path) -> None:
+    """Each scene's page, read alone: its runs table holds exactly the database's rows of that scene (status,
+    message with its ``|``, ``<`` and ``&``, reference error and CPU time as stored), and every chart on it is
+    that scene's, naming in its hover data only runs of that scene."""
+    runs = _database_rows(fixture_database)
+    pages = {page.name: page for page in report_pages(fixture_report)}
+    checked = {"rows": 0, "not ok": 0, "charts": 0}
+    for scene, rows in runs.groupby("scene"):
+        page = pages[f"scene_{scene}.html"]  # the fixture's scene names are their own file stems
+        text = page.read_text(encoding="utf-8")
+        shown = Rendered(text).table(f"{scene}: its runs (main columns)")
+        assert set(shown["scene"]) == {scene} and len(shown) == len(rows)
+        stored = {(row.integrator, setting_label(row.kh, row.tol)): row for row in rows.itertuples()}
+        for row in shown.itertuples(index=False):
+            run = stored.pop((row.integrator, f"tol={float(row.tol):g}" if row.tol != "–" else f"kh={row.kh}"))
+            assert row.status == run.status
+            assert row.message == ("–" if run.message is None else " ".join(str(run.message).split()))
+            for column in ("reference_error", "cpu_time_s"):
+                value = getattr(run, column)
+                assert (getattr(row, column) == "–" if value is None or math.isnan(value)
+                        else _number(getattr(row, column)) == pytest.approx(value, rel=5e-3)), column
+            checked["rows"] += 1
+            checked["not ok"] += row.status != "ok"
+        assert not stored  # every stored run of the scene is shown
+        settings = {(row.integrator, setting_label(row.kh, row.tol)) for row in rows.itertuples()}
+        for chart in re.findall(r"var figure = (.*?); Plotly\.newPlot", text, re.S):
+            figure = json.loads(chart)
+            assert figure["layout"]["title"]["text"].startswith(f"{scene}:")
+            named = {(hover[0], hover[2]) for trace in figure["data"] for hover in trace.get("customdata") or []}
+            assert named and named <= settings
+            checked["charts"] += 1
+    assert checked["rows"] == len(runs) and checked["not ok"] > 0 and checked["charts"] >= 4 * len(SCENE_NAMES)
