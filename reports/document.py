@@ -25,7 +25,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Iterator, Mapping, cast
+from typing import Iterator, Mapping
 from urllib.parse import quote
 
 import numpy as np
@@ -76,9 +76,21 @@ class Table:
     column_notes: dict[str, str] = field(default_factory=dict)
     collapsible: bool = False
     """Fold the table in the HTML page (``<details>``) with a box that filters its rows."""
+    details: str | None = None
+    """A text column (of ``display``) that the HTML page shows as a folded row under each row rather than as a
+    cell (the scenes table's prose); REPORT.md and the table files keep it as a column."""
 
 
 Block = Heading | Paragraph | Figure | Table
+
+
+@dataclass
+class Page:
+    """One HTML page of a report (``file`` in the report folder, e.g. ``index.html``) with its title and blocks."""
+
+    file: str
+    title: str
+    blocks: list[Block]
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -241,11 +253,20 @@ def _table_links(stem: str) -> list[tuple[str, str]]:
             (("CSV", "csv"), ("Markdown", "md"), ("LaTeX", "tex"), ("HTML", "html"))]
 
 
-def render_markdown(title: str, blocks: list[Block]) -> str:
-    """The blocks as Markdown (GitHub-flavoured: tables with pipes); every text from the data escaped
-    (``markdown_text``), so the only HTML in it is the ``<details>`` fold of a collapsible table."""
+def _figure_anchor(block: Figure) -> str:
+    """The id of a chart's figure element in its HTML page: its file stem's name (unique per report)."""
+    return "figure-" + block.stem.rsplit("/", 1)[-1]
+
+
+def render_markdown(title: str, blocks: list[Block] | list[Page]) -> str:
+    """The blocks (or every page's blocks, in order) as Markdown (GitHub-flavoured: tables with pipes); every
+    text from the data escaped (``markdown_text``), so the only HTML in it is the ``<details>`` fold of a
+    collapsible table. An interactive chart without static files links its place in its HTML page."""
+    pages = [page for page in blocks if isinstance(page, Page)]
+    placed = ([(page.file, block) for page in pages for block in page.blocks] if pages
+              else [("index.html", block) for block in blocks if not isinstance(block, Page)])
     lines = [f"# {markdown_text(title)}", ""]
-    for block in blocks:
+    for file, block in placed:
         if isinstance(block, Heading):
             lines += ["#" * block.level + " " + markdown_text(block.text), ""]
         elif isinstance(block, Paragraph):
@@ -257,7 +278,7 @@ def render_markdown(title: str, blocks: list[Block]) -> str:
                       f"*{caption}* ([SVG]({_url(block.stem + '.svg')}))", ""]
         elif isinstance(block, Figure):
             lines += [f"*{_inline_markdown(block.caption)}* (interactive chart in "
-                      f"[index.html](index.html#{_figure_anchor(block)}); static PNG and SVG: "
+                      f"[{file}]({_url(file)}#{_figure_anchor(block)}); static PNG and SVG: "
                       "`foucault-bench report --static`)", ""]
         elif isinstance(block, Table):
             links = ", ".join(f"[{kind}]({_url(path)})" for kind, path in _table_links(block.stem))
@@ -269,170 +290,6 @@ def render_markdown(title: str, blocks: list[Block]) -> str:
                 lines += ["Columns: " + "; ".join(f"{_code_span(name)}: {_inline_markdown(note)}"
                                                   for name, note in block.column_notes.items()), ""]
     return "\n".join(lines).rstrip() + "\n"
-
-
-_STYLE = """
-body { font-family: system-ui, sans-serif; max-width: 1360px; margin: 1.5em auto; padding: 0 1em; color: #222; }
-h1 { border-bottom: 2px solid #444; margin: 0.3em 0; } h2 { border-bottom: 1px solid #bbb; margin-top: 2em; }
-h2:first-of-type { margin-top: 0.6em; }
-figure { margin: 1.2em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
-figcaption { font-size: 0.92em; color: #444; }
-.table-wrap { overflow-x: auto; margin: 0.6em 0 1.2em 0; }
-table.data { border-collapse: collapse; font-size: 0.85em; }
-table.data th, table.data td { border: 1px solid #ccc; padding: 2px 6px; vertical-align: top; }
-table.data th { background: #f0f0f0; }
-table.data .num { text-align: right; white-space: nowrap; font-variant-numeric: tabular-nums; }
-table.data .text { text-align: left; max-width: 32em; overflow-wrap: break-word; }
-details.long-table > summary { cursor: pointer; }
-details.long-table input { margin: 0.5em 0.5em 0.5em 0; }
-.notes { font-size: 0.85em; color: #444; }
-nav ul { display: flex; flex-wrap: wrap; gap: 0.2em 1.2em; list-style: none; padding: 0; font-size: 0.85em;
-  margin: 0.3em 0; }
-div.chart { width: 100%; min-height: 520px; border: 1px solid #ddd; }
-.side-by-side { display: grid; grid-template-columns: fit-content(50%) minmax(0, 1fr); gap: 1em; align-items: start; }
-.side-table { min-width: 0; overflow-x: auto; } .side-table p { margin: 0 0 0.4em 0; font-size: 0.9em; }
-.side-table .table-wrap { margin: 0; } .side-table table.data { font-size: 0.78em; }
-.side-table table.data th, .side-table table.data td { padding: 1px 4px; }
-.side-chart figure { margin: 0; } .side-chart div.chart { min-height: 0; }
-"""
-
-
-_FILTER_SCRIPT = """
-function filterRows(input) {
-  var words = input.value.toLowerCase().split(/\\s+/).filter(Boolean);
-  var rows = input.parentNode.querySelectorAll('tbody tr');
-  var shown = 0;
-  rows.forEach(function (row) {
-    var text = row.textContent.toLowerCase();
-    var match = words.every(function (word) { return text.indexOf(word) >= 0; });
-    row.style.display = match ? '' : 'none';
-    if (match) { shown += 1; }
-  });
-  input.nextElementSibling.textContent = words.length ? shown + ' of ' + rows.length + ' rows' : '';
-}
-"""
-"""Filters a collapsible table's rows: a row stays when it contains every word typed (case-insensitive)."""
-
-
-def _anchors(blocks: list[Block]) -> dict[int, str]:
-    """A unique anchor per heading (index in ``blocks`` → id): headings whose text differs only in punctuation
-    (scenes ``a.b`` and ``a_b``) get ``-2``, ``-3``, … appended."""
-    anchors: dict[int, str] = {}
-    used: set[str] = set()
-    for index, block in enumerate(blocks):
-        if isinstance(block, Heading):
-            anchor, count = _anchor(block.text), 1
-            while anchor in used:
-                count += 1
-                anchor = f"{_anchor(block.text)}-{count}"
-            used.add(anchor)
-            anchors[index] = anchor
-    return anchors
-
-
-def _figure_anchor(block: Figure) -> str:
-    """The id of a chart's figure element in index.html: its file stem's name (unique per report)."""
-    return "figure-" + block.stem.rsplit("/", 1)[-1]
-
-
-BESIDE_CHART_HEIGHT_PX = 440
-"""The height of a chart drawn beside a table: with the table above the fold at 1400×900 (the first screen)."""
-
-
-def _interactive_html(block: Figure, number: int) -> str:
-    """A plotly chart: its div (``data-points``: the markers it should draw) and the script drawing it (a chart
-    beside a table ``BESIDE_CHART_HEIGHT_PX`` high, in a smaller font)."""
-    chart_id = f"chart-{number}"
-    layout = f"Object.assign(figure.layout, {{height: {BESIDE_CHART_HEIGHT_PX}, font: {{size: 10}}}})" if block.beside else "figure.layout"
-    static = (f" (static: <a href='{_attribute(_url(block.stem + '.png'))}'>PNG</a>, "
-              f"<a href='{_attribute(_url(block.stem + '.svg'))}'>SVG</a>)") if block.static else ""
-    figure_json = cast(str, block.interactive).replace("<", "\\u003c")  # JSON strings only: no </script> or <!-- ends it
-    return (f"<figure id='{_attribute(_figure_anchor(block))}' data-stem='{_attribute(block.stem)}'>"
-            f"<div class='chart' id='{chart_id}' "
-            f"data-points='{int(block.points)}'></div><script>"
-            f"(function () {{ var figure = {figure_json}; "
-            f"Plotly.newPlot('{chart_id}', figure.data, {layout}, {{responsive: true, displaylogo: false}})"
-            f".then(function (chart) {{ chart.on('plotly_legendclick', function (event) "
-            f"{{ return foucaultLegendClick(chart, event); }}); }}); }})();</script>"
-            f"<figcaption>{_inline_html(block.caption)}{static}</figcaption></figure>")
-
-
-def _table_html(block: Table) -> list[str]:
-    """A table with its file links, folded when collapsible, and its column notes."""
-    links = ", ".join(f"<a href='{_attribute(_url(path))}'>{kind}</a>" for kind, path in _table_links(block.stem))
-    parts = [f"<p><strong>{html.escape(block.title)}</strong> ({links})</p>"]
-    table = f"<div class='table-wrap'>{html_table(block.display)}</div>"
-    if block.collapsible:
-        table = (f"<details class='long-table'><summary>show the {len(block.display)} rows</summary>"
-                 "<input type='search' placeholder='filter rows: words, all must match' "
-                 "oninput='filterRows(this)'><span class='count'></span>" + table + "</details>")
-    parts.append(table)
-    if block.column_notes:
-        notes = "; ".join(f"<code>{html.escape(name)}</code>: {_inline_html(note)}"
-                          for name, note in block.column_notes.items())
-        parts.append(f"<p class='notes'>Columns: {notes}</p>")
-    return parts
-
-
-def render_html(title: str, blocks: list[Block]) -> str:
-    anchors = _anchors(blocks)
-    toc = "".join(f"<li><a href='#{_attribute(anchors[i])}'>{html.escape(b.text)}</a></li>"
-                  for i, b in enumerate(blocks) if isinstance(b, Heading) and b.level == 2)
-    head = ""
-    if any(isinstance(block, Figure) and block.interactive for block in blocks):
-        from foucault_bench.reports.interactive import LEGEND_SCRIPT, PLOTLY_JS
-
-        head = f"<script src='{PLOTLY_JS}' charset='utf-8'></script><script>{LEGEND_SCRIPT}</script>"
-    if any(isinstance(block, Table) and block.collapsible for block in blocks):
-        head += f"<script>{_FILTER_SCRIPT}</script>"
-    parts = [f"<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
-             f"<style>{_STYLE}</style>{head}</head><body>", f"<h1>{html.escape(title)}</h1>",
-             f"<nav><ul>{toc}</ul></nav>"]
-    charts = 0
-    for index, block in enumerate(blocks):
-        rendered: list[str] = []
-        if isinstance(block, Heading):
-            rendered.append(f"<h{block.level} id='{_attribute(anchors[index])}'>{html.escape(block.text)}"
-                            f"</h{block.level}>")
-        elif isinstance(block, Paragraph):
-            link = (f" <a href='{_attribute(_url(block.link[1]))}'>{html.escape(block.link[0])}</a>"
-                    if block.link else "")
-            rendered.append(f"<p>{_inline_html(block.text)}{link}</p>")
-        elif isinstance(block, Figure) and block.interactive:
-            charts += 1
-            rendered.append(_interactive_html(block, charts))
-        elif isinstance(block, Figure):
-            svg, png = _attribute(_url(block.stem + ".svg")), _attribute(_url(block.stem + ".png"))
-            rendered.append(f"<figure><a href='{svg}'><img src='{png}' alt='{_attribute(block.caption)}'></a>"
-                            f"<figcaption>{_inline_html(block.caption)} (<a href='{svg}'>SVG</a>)</figcaption>"
-                            "</figure>")
-        elif isinstance(block, Table):
-            rendered += _table_html(block)
-        if isinstance(block, Figure) and block.beside and index and isinstance(blocks[index - 1], Table):
-            table_parts = parts.pop()
-            rendered = [f"<div class='side-by-side'><div class='side-table'>{table_parts}</div>"
-                        f"<div class='side-chart'>{''.join(rendered)}</div></div>"]
-        parts.append("\n".join(rendered))
-    parts.append("</body></html>")
-    return "\n".join(parts) + "\n"
-
-
-def write_document(folder: Path, title: str, blocks: list[Block], html_name: str = "index.html",
-                   markdown_name: str = "REPORT.md") -> tuple[Path, Path]:
-    """Write the HTML and Markdown renderings of ``blocks`` into ``folder``; return their paths."""
-    folder.mkdir(parents=True, exist_ok=True)
-    copy_reference_docs(folder)
-    html_path = folder / html_name
-    markdown_path = folder / markdown_name
-    html_path.write_text(render_html(title, blocks), encoding="utf-8")
-    if any(isinstance(block, Figure) and block.interactive for block in blocks):
-        from plotly.offline import get_plotlyjs
-
-        from foucault_bench.reports.interactive import PLOTLY_JS
-
-        (folder / PLOTLY_JS).write_text(get_plotlyjs(), encoding="utf-8")
-    markdown_path.write_text(render_markdown(title, blocks), encoding="utf-8")
-    return html_path, markdown_path
 
 
 REFERENCE_DOCS = ("models", "integrators", "bench", "reports")

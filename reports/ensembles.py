@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 from foucault_bench.bench.ensembles.summary import (
     ensemble_summary, median_rows, member_rows, swept_values, worst_rows,
 )
-from foucault_bench.reports import charts
+from foucault_bench.reports import chart_style
 from foucault_bench.reports.document import Heading, Paragraph
 
 ENSEMBLE_VERDICTS = ("reference_error", "precession_rate_ref_error_earth", "energy_max_rel_error")
@@ -41,7 +41,7 @@ def _line_label(integrator: str, setting: str) -> str:
 
 def verdict_against_parameter(members: pd.DataFrame, verdict: str) -> Figure:
     """``verdict`` of every ok member row against the swept parameter, one line per integrator and setting
-    (members in parameter order; values below ``charts.LOG_FLOOR`` drawn at it)."""
+    (members in parameter order; values below ``chart_style.LOG_FLOOR`` drawn at it)."""
     field = first_field(members)
     figure = Figure(figsize=(7.0, 4.2))
     axes = figure.subplots()
@@ -49,9 +49,9 @@ def verdict_against_parameter(members: pd.DataFrame, verdict: str) -> Figure:
     table = table[table["status"] == "ok"]
     for (integrator, setting), group in table.groupby(["integrator", "ensemble_setting"], sort=True):
         group = group.sort_values(field, kind="stable")
-        values = group[verdict].astype(float).clip(lower=charts.LOG_FLOOR)
+        values = group[verdict].astype(float).clip(lower=chart_style.LOG_FLOOR)
         axes.plot(group[field].astype(float), values, marker="o", markersize=3,
-                  color=charts.family_colour(str(group["family"].iloc[0])), label=_line_label(integrator, setting))
+                  color=chart_style.family_colour(str(group["family"].iloc[0])), label=_line_label(integrator, setting))
     axes.set_yscale("log")
     axes.set_xlabel(field)
     axes.set_ylabel(VERDICT_TITLES[verdict])
@@ -68,8 +68,8 @@ def work_precision_of(picked: dict[str, pd.DataFrame], verdict: str) -> Figure:
     for axes, (title, rows) in zip(panels, picked.items(), strict=True):
         for integrator, group in rows.groupby("integrator", sort=True):
             group = group.sort_values("cpu_time_s", kind="stable")
-            axes.plot(group["cpu_time_s"].astype(float), group[verdict].astype(float).clip(lower=charts.LOG_FLOOR),
-                      marker="o", color=charts.family_colour(str(group["family"].iloc[0])), label=integrator)
+            axes.plot(group["cpu_time_s"].astype(float), group[verdict].astype(float).clip(lower=chart_style.LOG_FLOOR),
+                      marker="o", color=chart_style.family_colour(str(group["family"].iloc[0])), label=integrator)
         axes.set_xscale("log")
         axes.set_yscale("log")
         axes.set_xlabel("CPU time (s)")

@@ -30,7 +30,7 @@ from plotly.subplots import make_subplots
 
 from foucault_bench.bench.schema import STATUS_TIMEOUT, setting_label
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
-from foucault_bench.reports import charts
+from foucault_bench.reports import chart_style, charts
 
 PLOTLY_JS = "plotly.min.js"
 """File name of plotly.js in the report folder."""
@@ -38,13 +38,13 @@ PLOTLY_JS = "plotly.min.js"
 SYMBOLS = {"o": "circle", "s": "square", "D": "diamond", "v": "triangle-down", "P": "cross", "*": "star",
            "h": "hexagon", "<": "triangle-left", ">": "triangle-right", "p": "pentagon", "^": "triangle-up",
            "X": "x"}
-"""matplotlib marker (``charts.INTEGRATOR_MARKERS``) → plotly symbol."""
+"""matplotlib marker (``chart_style.INTEGRATOR_MARKERS``) → plotly symbol."""
 
 
 def _dash(linestyle: object) -> str:
     """plotly dash of a ``charts`` line style: solid family for fixed steps, dashed family for tolerances."""
-    for styles, dashes in ((charts.FIXED_STEP_LINESTYLES, ("solid", "dashdot", "dot")),
-                           (charts.ADAPTIVE_LINESTYLES, ("dash", "longdashdot", "longdash"))):
+    for styles, dashes in ((chart_style.FIXED_STEP_LINESTYLES, ("solid", "dashdot", "dot")),
+                           (chart_style.ADAPTIVE_LINESTYLES, ("dash", "longdashdot", "longdash"))):
         if linestyle in styles:
             return dashes[styles.index(linestyle)]
     return "solid"
@@ -61,7 +61,7 @@ def _text(value: object) -> str:
     if value is None or value is pd.NA:
         return "–"
     if isinstance(value, (float, np.floating, int, np.integer)) and not isinstance(value, bool):
-        return charts.number_text(float(value))
+        return chart_style.number_text(float(value))
     return str(value)
 
 
@@ -94,7 +94,7 @@ def _family_entry(family: str, colour: str) -> go.Scatter:
 
 def add_sweeps(figure: go.Figure, frame: pd.DataFrame, x_column: str, y_column: str, *, row: int = 1, col: int = 1,
                legend: bool = True, x_spread: str | None = None, top: float | None = None) -> None:
-    """One trace per integrator through its ok runs (``charts.sweeps``) and, when ``top`` is given, as the static
+    """One trace per integrator through its ok runs (``chart_style.sweeps``) and, when ``top`` is given, as the static
     charts draw them on their edges: one per integrator for its diverged and failed runs above the data at
     ``top`` (▲, ✕; "<integrator> not ok") and one for its ok runs without a plottable value below the data
     (▽, ``_bottom``; "<integrator> no value"), each at its x, or left of every run's x when that is unknown
@@ -102,8 +102,8 @@ def add_sweeps(figure: go.Figure, frame: pd.DataFrame, x_column: str, y_column: 
     families_seen: set[str] = set()
     left, left_slots = _left(frame, x_column), {"not ok": 0, "no value": 0}
     bottom = _bottom(frame, y_column)
-    for sweep in charts.sweeps(frame, x_column, y_column):
-        style = charts.integrator_style(sweep.integrator, sweep.family, sweep.adaptive)
+    for sweep in chart_style.sweeps(frame, x_column, y_column):
+        style = chart_style.integrator_style(sweep.integrator, sweep.family, sweep.adaptive)
         if legend and sweep.family not in families_seen:
             figure.add_trace(_family_entry(sweep.family, style["color"]), row=row, col=col)
         families_seen.add(sweep.family)
@@ -151,7 +151,7 @@ def _left(frame: pd.DataFrame, column: str) -> float:
 
 
 EDGE_SYMBOLS = {STATUS_DIVERGED: "triangle-up", STATUS_FAILED: "x", STATUS_TIMEOUT: "x"}
-"""Run status → plotly symbol of its marker above the data (``charts.DIVERGED_MARKER``, ``FAILED_MARKER``)."""
+"""Run status → plotly symbol of its marker above the data (``chart_style.DIVERGED_MARKER``, ``FAILED_MARKER``)."""
 
 
 def _bottom(frame: pd.DataFrame, column: str) -> float:
@@ -209,7 +209,7 @@ def convergence(scene_frame: pd.DataFrame, orders: dict[str, float]) -> go.Figur
         fitted = orders.get(str(trace.name).split(" (")[0])
         if fitted is not None and trace.meta != "family-toggle" and trace.showlegend is not False:
             trace.name = f"{trace.name}, " + ("no fit" if not np.isfinite(fitted) else f"fitted order {fitted:.2f}")
-    points = {sweep.integrator: sweep.points for sweep in charts.sweeps(fixed, "kh", "reference_error")}
+    points = {sweep.integrator: sweep.points for sweep in chart_style.sweeps(fixed, "kh", "reference_error")}
     for order, kh, error in charts.reference_slopes(fixed, points):
         figure.add_trace(go.Scatter(x=kh, y=error, mode="lines", name=f"slope {order}",
                                     line={"color": "grey", "dash": "dot", "width": 1}, hoverinfo="name"))

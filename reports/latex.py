@@ -12,6 +12,7 @@ meant to be ``\\input`` into a document.
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 import unicodedata
@@ -52,6 +53,7 @@ _SUPERSCRIPTS = {"⁰": "0", "¹": "1", "²": "2", "³": "3", "⁴": "4", "⁵":
                  "⁹": "9", "ⁿ": "n", "⁻": "-", "⁺": "+"}
 
 
+@functools.cache  # a pure function of one character, called for every character of every table
 def _greek(character: str) -> str | None:
     """``\\psi`` for ψ, ``\\Omega`` for Ω, ``A`` for a capital alpha (LaTeX has no command for it); None if not
     Greek."""
@@ -72,6 +74,7 @@ def _greek(character: str) -> str | None:
     return r"\varsigma" if final else "\\" + word
 
 
+@functools.lru_cache(maxsize=1 << 16)  # cells repeat (scene, integrator, status names)
 def latex_text(text: str) -> str:
     """``text`` as pure-ASCII LaTeX (text mode; math where a symbol needs it, adjacent math merged into one
     ``$…$``)."""

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from foucault_bench.reports.charts import integrator_style, set_log_scales
+from foucault_bench.reports.chart_style import integrator_style, set_log_scales
 
 BROUWER_LABEL = "Brouwer's law ε√n"
 

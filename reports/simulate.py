@@ -41,7 +41,7 @@ from matplotlib.figure import Figure
 from foucault_bench.bench.errors import InputError
 from foucault_bench.integrators import STATUS_OK
 from foucault_bench.integrators.registry import REGISTRY
-from foucault_bench.reports.charts import integrator_style
+from foucault_bench.reports.chart_style import integrator_style
 from foucault_bench.bench.simulation import SimulationResult, simulate
 from foucault_bench.bench.simulation_settings import SimulationSettings
 

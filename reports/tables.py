@@ -236,7 +236,8 @@ def orders_by_integrator(orders: pd.DataFrame, scene: str) -> dict[str, float]:
 
 
 def scenes_table(scenes: Sequence[Scene], runs: pd.DataFrame | None = None) -> pd.DataFrame:
-    """One row per scene: place, pendulum, release, duration and output grid, model and why, source. A scene of
+    """One row per scene: place, pendulum, release, duration and output grid, model, source and why that model
+    (last: the page folds it under each row, ``Table.details``). A scene of
     ``runs`` without a ``Scene`` (an inline scene of a matrix file the report cannot see) gets a row saying so,
     with the model, duration and output interval (duration / (n_out − 1)) its rows hold."""
     rows = []
@@ -261,7 +262,7 @@ def scenes_table(scenes: Sequence[Scene], runs: pd.DataFrame | None = None) -> p
         })
     return pd.DataFrame(rows, columns=["scene", "place", "length_m", "latitude_deg", "amplitude_m",
                                        "release_azimuth_deg", "release", "duration_s", "output_interval_s",
-                                       "model", "why_model", "source"])
+                                       "model", "source", "why_model"])
 
 
 def _agreed(values: pd.Series) -> object:

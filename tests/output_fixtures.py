@@ -20,9 +20,10 @@ import sys
 import matplotlib
 matplotlib.rcParams["svg.hashsalt"] = "fixed"  # with SOURCE_DATE_EPOCH: the same SVG bytes every build
 import foucault_bench.reports.build as build
-build.seed_blocks = lambda folder, prefix: []  # the seed section is tested in test_seed.py
-build._work_precision = lambda builder, runs: None  # one figure (convergence) is enough to test the writing
-build._recommendations = lambda builder, runs, targets: None  # (its charts are work-precision charts)
+from foucault_bench.reports import result_sections, study_sections
+build.SECTIONS.remove(study_sections.seed_section)  # the seed section is tested in test_seed.py
+result_sections._scene_work_precision = lambda *arguments: None  # one figure (convergence) is enough to test
+build.SECTIONS.remove(result_sections.recommendations)  # the writing (its charts are work-precision charts)
 {extra}
 from foucault_bench.bench.cli import main
 sys.exit(main(["report", *sys.argv[1:]]))

@@ -29,10 +29,12 @@ first worker that needs one builds it, a worker that needs it meanwhile waits fo
 from __future__ import annotations
 
 import math
+import re
 import shutil
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
+from urllib.parse import unquote
 
 import pytest
 from filelock import FileLock
@@ -221,6 +223,19 @@ def build_fixture_report(database: Path, folder: Path) -> Path:
     build_report(ReportInputs(runs=runs, adequacy=adequacy, provenance={"database": database.name},
                               include_seed=False, jobs=2), folder)
     return folder
+
+
+def report_pages(folder: Path) -> list[Path]:
+    """The HTML pages of the report in ``folder``: index.html and every page its bar of pages links, in order."""
+    index = Path(folder) / "index.html"
+    bar = re.search(r"<ul class='pages'>(.*?)</ul>", index.read_text(encoding="utf-8"), re.S)
+    linked = re.findall(r"<a href='([^']+)'>", bar.group(1)) if bar else []
+    return [index, *(Path(folder) / unquote(name) for name in linked)]
+
+
+def report_html(folder: Path) -> str:
+    """Every HTML page of the report in ``folder`` (``report_pages``), one after another."""
+    return "\n".join(page.read_text(encoding="utf-8") for page in report_pages(folder))
 
 
 def built_once(request: pytest.FixtureRequest, name: str, build: Callable[[Path], object]) -> Path:

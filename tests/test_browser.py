@@ -31,6 +31,7 @@ from foucault_bench.bench.studies import (
     stability_sweep,
 )
 import test_report_oracle_charts as oracle
+from report_fixture import report_html, report_pages
 from test_reports import adequacy_fixture, results_fixture
 
 BROWSER = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -75,7 +76,8 @@ class ChartCounter(HTMLParser):
 
 
 @pytest.fixture(scope="module")
-def report_dom(tmp_path_factory) -> tuple[Path, str]:
+def report_dom(tmp_path_factory) -> tuple[Path, dict[str, str]]:
+    """A report with every kind of chart, and the DOM of each of its pages (by file name)."""
     folder = tmp_path_factory.mktemp("interactive-report")
     studies = {
         "study_long_time_energy": long_time_energy(LongTimeEnergyConfig(
@@ -87,7 +89,8 @@ def report_dom(tmp_path_factory) -> tuple[Path, str]:
     runs = results_fixture()  # one scene: every kind of chart, half the figures
     build_report(ReportInputs(runs=runs[runs["scene"] == "lab"], studies=studies, adequacy=adequacy_fixture(),
                               include_seed=True), folder)
-    return folder, _dom(folder / "index.html", tmp_path_factory.mktemp("browser-profile"))
+    return folder, {page.name: _dom(page, tmp_path_factory.mktemp("browser-profile"))
+                    for page in report_pages(folder)}
 
 
 def _dom(page: Path, profile: Path) -> str:
@@ -98,12 +101,15 @@ def _dom(page: Path, profile: Path) -> str:
     return done.stdout
 
 
-def test_every_chart_draws_its_points_lines_and_legend(report_dom: tuple[Path, str]) -> None:
-    folder, dom = report_dom
+def test_every_chart_draws_its_points_lines_and_legend(report_dom: tuple[Path, dict[str, str]]) -> None:
+    folder, doms = report_dom
     counter = ChartCounter()
-    counter.feed(dom)
-    html = (folder / "index.html").read_text(encoding="utf-8")
-    assert len(counter.charts) == html.count("class='chart'") == html.count("<figure")  # every chart interactive
+    for page, dom in doms.items():
+        before = len(counter.charts)
+        counter.feed(dom)
+        html = (folder / page).read_text(encoding="utf-8")
+        assert len(counter.charts) - before == html.count("class='chart'") == html.count("<figure"), page
+    assert len(doms) >= 4 and len(counter.charts) > len(doms)  # front, scene, studies and runs pages
     for chart in counter.charts:
         assert chart["points"] == chart["expected"], chart
         assert chart["points"] + chart["lines"] > 0, chart
@@ -113,10 +119,11 @@ def test_every_chart_draws_its_points_lines_and_legend(report_dom: tuple[Path, s
     assert sum(chart["expected"] == 0 for chart in counter.charts) == 4
 
 
-def test_points_carry_their_run_for_the_hover(report_dom: tuple[Path, str]) -> None:
-    folder, dom = report_dom
-    assert "plotly-customdata" in dom  # plotly marks points that hold the run (hovertemplate fields)
-    html = (folder / "index.html").read_text(encoding="utf-8")
+def test_points_carry_their_run_for_the_hover(report_dom: tuple[Path, dict[str, str]]) -> None:
+    folder, doms = report_dom
+    assert "plotly-customdata" in doms["index.html"]  # plotly marks points that hold the run (hovertemplate fields)
+    assert all("plotly-customdata" in dom for page, dom in doms.items() if page.startswith("scene_"))
+    html = report_html(folder)
     for field in ("CPU time", "wall time", "nfev", "steps", "status", "all runge-kutta"):
         assert field in html
 
@@ -154,13 +161,14 @@ marker paths drawn per trace."""
 def browser_charts(fixture_report: Path, tmp_path_factory) -> tuple[dict[str, oracle.Chart], list[dict]]:
     """The fixture report's charts as the browser holds them (by static file stem, as ``oracle.page_charts``),
     and the probe's raw entries."""
-    page = fixture_report / "index_probe.html"
-    page.write_text((fixture_report / "index.html").read_text(encoding="utf-8").replace("</body>", PROBE + "</body>"),
-                    encoding="utf-8")
-    dom = _dom(page, tmp_path_factory.mktemp("probe-profile"))
-    probe = re.search(r"<pre id=\"probe\">(.*?)</pre>", dom, re.S)
-    assert probe is not None, dom[-2000:]
-    entries = json.loads(probe.group(1).replace("&lt;", "<").replace("&gt;", ">").replace("&amp;", "&"))
+    entries = []
+    for source in report_pages(fixture_report):  # a probing copy of each page, beside it (same links)
+        page = source.with_name(f"probe_{source.name}")
+        page.write_text(source.read_text(encoding="utf-8").replace("</body>", PROBE + "</body>"), encoding="utf-8")
+        dom = _dom(page, tmp_path_factory.mktemp("probe-profile"))
+        probe = re.search(r"<pre id=\"probe\">(.*?)</pre>", dom, re.S)
+        assert probe is not None, dom[-2000:]
+        entries += json.loads(probe.group(1).replace("&lt;", "<").replace("&gt;", ">").replace("&amp;", "&"))
     by_id = {entry["id"]: entry for entry in entries}
     page_charts = oracle.page_charts(fixture_report)
     return ({stem: oracle.Chart(stem, chart.caption, {"data": by_id[chart.chart_id]["data"],

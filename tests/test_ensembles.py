@@ -224,7 +224,7 @@ def test_report_charts_read_back_against_the_database(database: Path) -> None:
     """Each ensemble chart's plotly data (what the page embeds) holds the stored members' values."""
     from foucault_bench.bench.run.store import ResultsStore
     from foucault_bench.reports import ensembles, interactive
-    from foucault_bench.reports.build import file_stem
+    from foucault_bench.reports.builder import file_stem
 
     class Recorder:
         def __init__(self) -> None:

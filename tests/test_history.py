@@ -309,14 +309,17 @@ def test_a_report_of_a_database_of_several_revisions_links_its_history_page(hist
     """The report's overview links history/history.html when the database holds more than one revision, and the
     page written there is the history of the database (the figure drawing is replaced: it is tested elsewhere)."""
     import foucault_bench.reports.build as build
+    from foucault_bench.reports.builder import Builder
+    from foucault_bench.reports.html_page import write_pages
+    from foucault_bench.reports.result_sections import overview
 
     seen = {}
 
-    def overview_only(inputs, folder, progress=False):
+    def overview_only(inputs, folder, progress=False, previous=None):
         seen["revisions"] = inputs.revisions
-        builder = build._Builder(folder, False, False)
-        build._overview(builder, inputs)
-        return build.write_document(folder, "test", builder.blocks)
+        builder = Builder(folder, False, False)
+        overview(builder, inputs)
+        return write_pages(folder, "test", builder.pages)
 
     monkeypatch.setattr(build, "build_report", overview_only)
     out = tmp_path / "report"

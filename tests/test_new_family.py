@@ -11,7 +11,7 @@ import pytest
 from foucault_bench.bench.studies import LongTimeEnergyConfig, family_representatives, long_time_energy
 from foucault_bench.integrators import REGISTRY, register
 from foucault_bench.integrators.registry import METHODS_PACKAGE, built_in_names, is_built_in, unregister
-from foucault_bench.reports import charts
+from foucault_bench.reports import chart_style as charts
 
 FAKE_NAME = "fake_new_family_method"
 FAKE_FAMILY = "fake-new-family"

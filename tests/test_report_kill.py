@@ -34,8 +34,8 @@ def kill_self():
 """
 
 KILL_BEFORE_MARKDOWN = KILL_SELF + """
-import foucault_bench.reports.document as document
-document.render_markdown = lambda *args, **kwargs: kill_self()
+import foucault_bench.reports.html_page as html_page
+html_page.render_markdown = lambda *args, **kwargs: kill_self()
 """
 """index.html and plotly.min.js are written, REPORT.md is not (the half-written report of the issue)."""
 
@@ -64,15 +64,16 @@ shutil.rmtree = rmtree
 def place(tmp_path_factory):
     """The tiny database and the old report (a complete report written in this process, without figures)."""
     import foucault_bench.reports.build as build
+    from foucault_bench.reports import result_sections, study_sections
 
     folder = tmp_path_factory.mktemp("kill")
     database = folder / "results.sqlite"
     tiny_database(database)
     old = folder / "old"
     patch = pytest.MonkeyPatch()
-    patch.setattr(build, "seed_blocks", lambda folder, prefix: [])
-    patch.setattr(build, "_work_precision", lambda builder, runs: None)
-    patch.setattr(build, "_recommendations", lambda builder, runs, targets: None)
+    patch.setattr(build, "SECTIONS", [section for section in build.SECTIONS
+                                      if section not in (study_sections.seed_section, result_sections.recommendations)])
+    patch.setattr(result_sections, "_scene_work_precision", lambda *arguments: None)
     try:
         assert cli_main(["report", "--db", str(database), "--out", str(old), "--studies", "skip", "--static",
                          "--targets", "1e-3"]) == 0

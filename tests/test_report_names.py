@@ -11,6 +11,7 @@ import pandas as pd
 
 from foucault_bench.bench.problems.scenes import SCENE_NAME_PATTERN, SCENES
 from foucault_bench.reports.build import ReportInputs, build_report, file_stem
+from report_fixture import report_html, report_pages
 from test_reports import results_fixture
 
 SAFE = re.compile(r"^[a-z0-9_-]+$")
@@ -39,15 +40,16 @@ def test_scenes_with_dots_get_their_own_figures_and_links(tmp_path: Path) -> Non
         renamed.append(part)
     build_report(ReportInputs(runs=pd.concat(renamed, ignore_index=True), include_seed=False, interactive=False),
                  tmp_path)
-    html = (tmp_path / "index.html").read_text(encoding="utf-8")
+    html = report_html(tmp_path)
     figures = sorted(set(re.findall(r"src='(figures/[^']+\.png)'", html)))
     for link in figures:
         assert (tmp_path / link).is_file(), link
     for name in ("seed_v1.5", "seed_v1.6", "seed_v1_5"):
         assert f"figures/convergence_{file_stem(name)}.png" in figures
     assert len(list((tmp_path / "figures").glob("convergence_*.png"))) == 3
-    anchors = re.findall(r"id='([^']+)'", html)
-    assert len(anchors) == len(set(anchors))
+    for page in report_pages(tmp_path):  # an anchor is unique in its page
+        anchors = re.findall(r"id='([^']+)'", page.read_text(encoding="utf-8"))
+        assert len(anchors) == len(set(anchors)), page
 
 
 def test_report_targets_must_be_positive(tmp_path: Path, capsys) -> None:

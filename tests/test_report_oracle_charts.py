@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from report_fixture import INLINE_SCENE
+from report_fixture import INLINE_SCENE, report_html
 
 VERDICT_WORDS = {"reference_error": "reference error", "energy_max_rel_error": "energy error",
                  "energy_drift_per_s": "energy drift", "precession_rate_ref_error": "precession-rate error",
@@ -67,8 +67,9 @@ class Chart:
 
 
 def page_charts(folder: Path) -> dict[str, Chart]:
-    """Every chart of index.html by its static file's stem (``figures/NAME``)."""
-    html = (folder / "index.html").read_text(encoding="utf-8")
+    """Every chart of the report's pages (``report_fixture.report_html``) by its static file's stem
+    (``figures/NAME``)."""
+    html = report_html(folder)
     found = {}
     for stem, block in re.findall(r"<figure(?: id='[^']+' data-stem='([^']+)')?>(.*?)</figure>", html, re.S):
         data = re.search(r"var figure = (.*?); Plotly\.newPlot", block, re.S)
@@ -440,7 +441,7 @@ def assert_static_elements_are_interactive(static, plotly_figure: dict, name: st
 
 
 def synthetic_study_tables() -> dict[str, pd.DataFrame]:
-    """Small study tables with the columns the study charts read (``reports.charts``): a fixed-step integrator
+    """Small study tables with the columns the study charts read (``reports.study_charts``): a fixed-step integrator
     with a declared limit and diverged runs, one without a limit, error bars, an unknown value."""
     config = {"config_model": "linear", "config_length_m": 67.0, "config_latitude_deg": 48.8, "config_steps": 1000,
               "config_amplitude_m": 3.0, "config_duration_s": 3600.0}
@@ -472,7 +473,7 @@ def synthetic_study_tables() -> dict[str, pd.DataFrame]:
 
 
 def test_study_charts_keep_every_element_in_their_interactive_version() -> None:
-    from foucault_bench.reports import charts as static_charts
+    from foucault_bench.reports import study_charts as static_charts
     from foucault_bench.reports.interactive import from_matplotlib
 
     tables = synthetic_study_tables()
@@ -489,7 +490,7 @@ def test_study_charts_keep_every_element_in_their_interactive_version() -> None:
 
 
 def test_adequacy_chart_keeps_every_element(charts: dict[str, Chart], adequacy_rows: pd.DataFrame) -> None:
-    from foucault_bench.reports import charts as static_charts
+    from foucault_bench.reports import study_charts as static_charts
 
     assert_static_elements_are_interactive(static_charts.adequacy(adequacy_rows),
                                            charts["figures/model_adequacy"].figure, "model_adequacy")

@@ -12,6 +12,7 @@ a tag, no attribute or element injected into the page.
 from __future__ import annotations
 
 import math
+import json
 import re
 from html.parser import HTMLParser
 from pathlib import Path
@@ -26,13 +27,17 @@ from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.schema import setting_label
 from foucault_bench.reports.build import ReportInputs, build_report
 from foucault_bench.reports.document import Figure, Heading, Paragraph, Table, display_frame, format_value
-from foucault_bench.reports.document import render_html, render_markdown
+from foucault_bench.reports.document import render_markdown
+from foucault_bench.reports.html_page import render_html
 from report_fixture import (
     DIVERGED_MESSAGE,
     FAILED_MESSAGE,
     FAILED_WITH_COST_MESSAGE,
     INLINE_SCENE,
+    SCENE_NAMES,
     fixture_adequacy,
+    report_html,
+    report_pages,
 )
 
 INJECTION = "q' onmouseover='alert(5)' x='"
@@ -43,7 +48,7 @@ PLUGIN_INTEGRATOR = "plug_in_solver"
 PROVENANCE = "made | elsewhere <x> & `y` **z**"
 
 SAFE_ATTRIBUTES = {"lang", "charset", "id", "class", "href", "src", "alt", "type", "placeholder", "data-points",
-                   "data-stem", "oninput"}
+                   "data-stem", "oninput", "colspan"}
 """Every attribute the report's own markup writes (``oninput`` only on the filter box of a folded table)."""
 SAFE_ELEMENTS = {"html", "head", "meta", "title", "style", "script", "body", "h1", "h2", "h3", "nav", "ul", "li",
                  "a", "p", "strong", "em", "code", "figure", "img", "figcaption", "div", "table", "thead",
@@ -71,6 +76,8 @@ class Rendered(HTMLParser):
         self._figures = 0
         self._last_strong = ""
         self._row: list[str] | None = None
+        self._details = False  # in a table's folded row (``Table.details``)
+        self._summary = ""
         self.feed(text)
         self.close()
 
@@ -82,6 +89,7 @@ class Rendered(HTMLParser):
             self.tables.append((self._last_strong, []))
         elif tag == "tr":
             self._row = []
+            self._details = "details" in (dict(attrs).get("class") or "").split()
         elif tag == "img":
             for entry in self._open:
                 entry[2] = True
@@ -91,6 +99,12 @@ class Rendered(HTMLParser):
     def handle_endtag(self, tag: str) -> None:
         if tag == "figure":
             self._figures -= 1
+        elif tag == "tr" and self._row is not None and self._details:
+            rows = self.tables[-1][1]  # a folded row: its text is the last column of the row above it
+            rows[-1].extend(self._row)
+            if len(rows[0]) < len(rows[-1]):
+                rows[0].append(self._summary)
+            self._row, self._details = None, False
         elif tag == "tr" and self._row is not None:
             self.tables[-1][1].append(self._row)
             self._row = None
@@ -100,13 +114,15 @@ class Rendered(HTMLParser):
         assert opened == tag, (opened, tag)
         text = " ".join("".join(pieces).split())
         if tag in ("th", "td"):
-            self._row.append(text)
+            self._row.append(text.removeprefix(self._summary).lstrip() if self._details else text)
         elif tag.startswith("h"):
             self.headings.append(text)
         elif tag == "strong":
             self._last_strong = text
         elif tag == "figcaption":
             self.captions.append(text)
+        elif tag == "summary":
+            self._summary = text
         elif tag == "p" and self._figures == 0:
             if image:
                 self.image_paragraphs += 1
@@ -135,7 +151,7 @@ def _markdown_as_html(markdown: str) -> str:
 
 
 def _renderings(folder: Path) -> tuple[Rendered, Rendered]:
-    page = Rendered((folder / "index.html").read_text(encoding="utf-8"))
+    page = Rendered(report_html(folder))
     markdown = Rendered(_markdown_as_html((folder / "REPORT.md").read_text(encoding="utf-8")))
     return page, markdown
 
@@ -190,7 +206,8 @@ def test_report_md_tables_equal_index_html_tables_cell_by_cell(fixture_report: P
         assert len(page_rows) == len(markdown_rows) > 1, page_title
         for page_row, markdown_row in zip(page_rows, markdown_rows, strict=True):
             assert page_row == markdown_row, page_title
-    assert page.headings == markdown.headings
+    assert [heading for index, heading in enumerate(page.headings)
+            if index == 0 or heading != page.headings[0]] == markdown.headings  # each page repeats the title
     assert page.paragraphs == [text for text in markdown.paragraphs if not _figure_paragraph(text)]
     captions = [text.rsplit(" (", 1)[0] for text in page.captions]
     assert captions == [text.rsplit(" (", 1)[0] for text in markdown.paragraphs if _figure_paragraph(text)]
@@ -318,7 +335,7 @@ def test_convergence_points_are_the_points_fitted(fixture_report: Path, fixture_
     positive and ≤ 0.1, where it has not saturated) are consecutive in the sweep and their least-squares slope
     is the fitted order, printed with two decimals as in the charts' legends; no points, no order."""
     runs = _database_rows(fixture_database)
-    shown = Rendered((fixture_report / "index.html").read_text(encoding="utf-8")).table(
+    shown = Rendered(report_html(fixture_report)).table(
         "Observed and declared orders of convergence")
     full = pd.read_csv(fixture_report / "tables" / "convergence_orders.csv").set_index(["scene", "integrator"])
     checked = {"fitted": 0, "none": 0}
@@ -344,7 +361,7 @@ def test_convergence_points_are_the_points_fitted(fixture_report: Path, fixture_
 
 def test_all_runs_shows_cpu_time_and_its_spread(fixture_report: Path, fixture_database: Path) -> None:
     runs = _database_rows(fixture_database)
-    shown = Rendered((fixture_report / "index.html").read_text(encoding="utf-8")).table("All runs (main columns)")
+    shown = Rendered(report_html(fixture_report)).table("All runs (main columns)")
     assert len(shown) == len(runs)
     keyed = {(row.scene, row.integrator, setting_label(row.kh, row.tol)): row for row in runs.itertuples()}
     for row in shown.itertuples(index=False):
@@ -361,7 +378,7 @@ def test_all_runs_shows_cpu_time_and_its_spread(fixture_report: Path, fixture_da
 def test_a_setting_quoted_in_a_summary_is_found_in_the_tables(fixture_report: Path) -> None:
     """kh has the digits of ``bench.schema.setting_label`` in every table: each ``kh=…`` setting of the
     summaries is a kh cell of the same scene and integrator in "All runs"."""
-    page = Rendered((fixture_report / "index.html").read_text(encoding="utf-8"))
+    page = Rendered(report_html(fixture_report))
     runs = page.table("All runs (main columns)")
     kh_cells = set(zip(runs["scene"], runs["integrator"], runs["kh"], strict=True))
     quoted = 0
@@ -380,7 +397,7 @@ def test_a_setting_quoted_in_a_summary_is_found_in_the_tables(fixture_report: Pa
 def test_the_scenes_table_fills_an_inline_scene_from_its_rows(fixture_report: Path,
                                                                fixture_database: Path) -> None:
     runs = _database_rows(fixture_database)
-    scenes = Rendered((fixture_report / "index.html").read_text(encoding="utf-8")).table(
+    scenes = Rendered(report_html(fixture_report)).table(
         "The scenes: place, pendulum, release, grid, model and why").set_index("scene")
     assert sorted(scenes.index) == sorted(runs["scene"].unique())
     for scene, rows in runs.groupby("scene"):
@@ -456,3 +473,37 @@ def test_the_convergence_notes_say_what_was_fitted() -> None:
 
     assert "over the ok runs" not in COLUMN_NOTES["fitted_order"] and "saturated" in COLUMN_NOTES["fitted_order"]
     assert "used" in COLUMN_NOTES["points"]
+
+
+def test_each_scene_page_shows_that_scene_s_rows_only(fixture_report: Path, fixture_database: Path) -> None:
+    """Each scene's page, read alone: its runs table holds exactly the database's rows of that scene (status,
+    message with its ``|``, ``<`` and ``&``, reference error and CPU time as stored), and every chart on it is
+    that scene's, naming in its hover data only runs of that scene."""
+    runs = _database_rows(fixture_database)
+    pages = {page.name: page for page in report_pages(fixture_report)}
+    checked = {"rows": 0, "not ok": 0, "charts": 0}
+    for scene, rows in runs.groupby("scene"):
+        page = pages[f"scene_{scene}.html"]  # the fixture's scene names are their own file stems
+        text = page.read_text(encoding="utf-8")
+        shown = Rendered(text).table(f"{scene}: its runs (main columns)")
+        assert set(shown["scene"]) == {scene} and len(shown) == len(rows)
+        stored = {(row.integrator, setting_label(row.kh, row.tol)): row for row in rows.itertuples()}
+        for row in shown.itertuples(index=False):
+            run = stored.pop((row.integrator, f"tol={float(row.tol):g}" if row.tol != "–" else f"kh={row.kh}"))
+            assert row.status == run.status
+            assert row.message == ("–" if run.message is None else " ".join(str(run.message).split()))
+            for column in ("reference_error", "cpu_time_s"):
+                value = getattr(run, column)
+                assert (getattr(row, column) == "–" if value is None or math.isnan(value)
+                        else _number(getattr(row, column)) == pytest.approx(value, rel=5e-3)), column
+            checked["rows"] += 1
+            checked["not ok"] += row.status != "ok"
+        assert not stored  # every stored run of the scene is shown
+        settings = {(row.integrator, setting_label(row.kh, row.tol)) for row in rows.itertuples()}
+        for chart in re.findall(r"var figure = (.*?); Plotly\.newPlot", text, re.S):
+            figure = json.loads(chart)
+            assert figure["layout"]["title"]["text"].startswith(f"{scene}:")
+            named = {(hover[0], hover[2]) for trace in figure["data"] for hover in trace.get("customdata") or []}
+            assert named and named <= settings
+            checked["charts"] += 1
+    assert checked["rows"] == len(runs) and checked["not ok"] > 0 and checked["charts"] >= 4 * len(SCENE_NAMES)

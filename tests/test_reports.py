@@ -26,6 +26,7 @@ from foucault_bench.bench.studies import (
 )
 from foucault_bench.reports import tables
 from foucault_bench.reports.build import ReportInputs, build_report
+from report_fixture import report_html, report_pages
 from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS
 
 FIXED_STEP_ORDERS = {"rk4": 4, "verlet": 2, "explicit_euler": 1}
@@ -112,11 +113,14 @@ def report(tmp_path_factory, small_studies) -> Path:
 
 
 def test_report_writes_every_file_it_links(report: Path) -> None:
-    html = (report / "index.html").read_text(encoding="utf-8")
+    html = report_html(report)
     markdown = (report / "REPORT.md").read_text(encoding="utf-8")
     html_links = set(re.findall(r"(?:src|href)='([^'#]+)'", html))
-    markdown_links = set(re.findall(r"\]\(([^)]+)\)", markdown))
-    assert html_links == markdown_links | {"plotly.min.js"}  # same content in both renderings
+    markdown_links = set(re.findall(r"\]\(([^)#]+)(?:#[^)]*)?\)", markdown))
+    pages = {page.name for page in report_pages(report)}
+    assert html_links == markdown_links | {"plotly.min.js"} | pages  # same content, and the pages' bar
+    assert {"index.html", "runs.html", "studies.html", "scene_lab.html", "scene_pantheon.html"} <= pages
+    assert html.count("<script src='plotly.min.js'") == len(pages) - 1  # one file for all (runs.html: no chart)
     assert "cdn" not in html.lower() and "https://" not in html  # opens offline
     for link in html_links:
         assert (report / link).is_file(), link
@@ -227,7 +231,7 @@ def test_report_refuses_results_without_the_schema_columns(tmp_path: Path) -> No
 
 
 def test_report_command_reads_the_results_database(tmp_path: Path, monkeypatch) -> None:
-    import foucault_bench.reports.build as build_module
+    from foucault_bench.reports import study_sections
     from foucault_bench.bench.cli import main as cli_main
     from foucault_bench.bench.run.matrix import Matrix
     from foucault_bench.bench.run.store import ResultsStore
@@ -245,7 +249,7 @@ def test_report_command_reads_the_results_database(tmp_path: Path, monkeypatch) 
         store.write_adequacy(matrix_id, "lab", adequacy_fixture().query("scene == 'lab'").drop(columns="scene")
                              .to_dict("records"))
         store.finish_matrix_run(matrix_id)
-    monkeypatch.setattr(build_module, "seed_blocks", lambda folder, prefix: [])  # tested in test_seed.py
+    monkeypatch.setattr(study_sections, "seed_blocks", lambda folder, prefix: [])  # tested in test_seed.py
     out = tmp_path / "report"
     assert cli_main(["report", "--db", str(database), "--out", str(out), "--studies", "skip"]) == 0
     markdown = (out / "REPORT.md").read_text(encoding="utf-8")
@@ -254,10 +258,12 @@ def test_report_command_reads_the_results_database(tmp_path: Path, monkeypatch) 
     assert len(compact) == len(runs) and set(compact["integrator"]) == {"rk4", "scipy_lsoda"}
     # without --static: no static files, and REPORT.md links each chart to its figure in index.html
     assert not list(out.glob("figures/*"))
-    html = (out / "index.html").read_text(encoding="utf-8")
-    linked = re.findall(r"\(interactive chart in \[index\.html\]\(index\.html#([^)]+)\)", markdown)
+    html = report_html(out)
+    linked = re.findall(r"\(interactive chart in \[([^]]+)\]\(\1#([^)]+)\)", markdown)
     figure_ids = re.findall(r"<figure id='([^']+)'[^>]*><div class='chart'", html)
-    assert linked == figure_ids and "figure-model_adequacy" in linked
+    assert [figure for _, figure in linked] == figure_ids and ("index.html", "figure-model_adequacy") in linked
+    for page, figure in linked:  # each link names the page holding that chart
+        assert f"<figure id='{figure}'" in (out / page).read_text(encoding="utf-8"), (page, figure)
     assert "(static:" not in html
     assert cli_main(["report", "--db", str(database), "--out", str(out), "--studies", "skip", "--static",
                      "--jobs", "1"]) == 0
@@ -287,7 +293,7 @@ def test_a_scene_where_every_run_failed_still_draws_and_tabulates(tmp_path: Path
 
 
 def test_the_report_says_how_each_family_s_cost_was_measured() -> None:
-    from foucault_bench.reports.build import cost_basis_sentences
+    from foucault_bench.reports.result_sections import cost_basis_sentences
 
     runs = pd.DataFrame({"family": ["runge-kutta", "runge-kutta", "multistep"],
                          "integrator": ["dopri5", "scipy_rk45", "cvode_bdf_py"]})

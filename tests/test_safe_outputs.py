@@ -278,10 +278,13 @@ def _quick_sections(monkeypatch) -> None:
     """A report without figures and without the seed section: only its tables and documents are written."""
     import foucault_bench.reports.build as build
 
-    monkeypatch.setattr(build, "seed_blocks", lambda folder, prefix: [])
-    monkeypatch.setattr(build, "_work_precision", lambda builder, runs: None)
-    monkeypatch.setattr(build, "_convergence", lambda builder, runs: None)
-    monkeypatch.setattr(build, "_recommendations", lambda builder, runs, targets: None)
+    from foucault_bench.reports import result_sections, study_sections
+
+    monkeypatch.setattr(build, "SECTIONS", [section for section in build.SECTIONS
+                                            if section not in (study_sections.seed_section,
+                                                               result_sections.recommendations)])
+    monkeypatch.setattr(result_sections, "_scene_work_precision", lambda *arguments: None)
+    monkeypatch.setattr(result_sections, "_scene_convergence", lambda *arguments: None)
 
 
 def test_an_earlier_report_is_replaced_whole_and_a_user_folder_only_with_force(database, tmp_path, monkeypatch,

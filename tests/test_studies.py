@@ -243,13 +243,16 @@ def test_precession_study_runs_on_a_model_that_reads_fewer_parameters() -> None:
 # the study texts of the report, recomputed from the study tables
 # --------------------------------------------------------------------------------------------------------------
 def _study_paragraphs(tables: dict[str, pd.DataFrame], tmp_path) -> list[str]:
-    """The paragraphs the report writes for these study tables (``reports.build._studies``)."""
-    from foucault_bench.reports.build import _Builder, _studies
-    from foucault_bench.reports.document import Paragraph
+    """The paragraphs the report writes for these study tables (``reports.study_sections.studies``)."""
+    import pandas as pd
 
-    builder = _Builder(tmp_path, progress=False, interactive=False)
-    _studies(builder, tables)
-    return [block.text for block in builder.blocks if isinstance(block, Paragraph)]
+    from foucault_bench.reports.builder import Builder, ReportInputs
+    from foucault_bench.reports.document import Paragraph
+    from foucault_bench.reports.study_sections import studies
+
+    builder = Builder(tmp_path, progress=False, interactive=False)
+    studies(builder, ReportInputs(runs=pd.DataFrame(), studies=tables))
+    return [block.text for page in builder.pages for block in page.blocks if isinstance(block, Paragraph)]
 
 
 def _built_in_families() -> set[str]:

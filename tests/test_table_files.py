@@ -13,16 +13,16 @@ import pandas as pd
 import pytest
 
 from foucault_bench.reports import tables
-from foucault_bench.reports.build import _Builder
+from foucault_bench.reports.builder import Builder
 from foucault_bench.reports.document import (
     Table,
     display_frame,
     html_table,
     numeric_columns,
-    render_html,
     render_markdown,
     write_table_files,
 )
+from foucault_bench.reports.html_page import render_html
 from foucault_bench.reports.latex import latex_table, latex_text
 from test_reports import adequacy_fixture, results_fixture
 
@@ -123,7 +123,7 @@ def test_the_all_runs_table_folds_and_filters() -> None:
 
 
 def test_the_figure_counter_shows_a_total(tmp_path: Path, capsys) -> None:
-    builder = _Builder(tmp_path, progress=True, interactive=False)
+    builder = Builder(tmp_path, progress=True, interactive=False)
     drawn = []
     for name in ("a", "b", "c"):
         builder.figure(name, f"figure {name}", lambda stem: drawn.append(stem.name) or stem)

@@ -1,0 +1,255 @@
+"""The report under construction: its pages of blocks, the figures still to draw, and the tables written beside.
+
+Sections (``reports.build.SECTIONS``) add blocks to a ``Builder``: ``page`` opens a page (``index.html``, one
+page per scene, the studies, all runs), ``add`` appends headings and paragraphs, ``table`` writes a table's files
+and shows it, ``figure`` and ``curves`` keep a place for a chart that ``draw_figures`` draws once every section
+has run: on ``jobs`` worker processes, in the page's order whatever order they finish in, with a progress bar
+naming each figure drawn. A figure whose inputs did not change since the previous build of the same folder is not
+drawn again (``reports.figure_cache``): its blocks and static files are taken from that build.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import multiprocessing.context
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+from typing import TYPE_CHECKING, Callable, Iterator
+
+import pandas as pd
+from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS
+from matplotlib.figure import Figure as MplFigure
+from tqdm import tqdm
+
+from foucault_bench.reports import chart_style, interactive, tables
+from foucault_bench.reports.document import Block, Figure, Page, Paragraph, Table, write_table_files
+from foucault_bench.reports.figure_cache import FigureCache, Unhashable, digest
+
+if TYPE_CHECKING:
+    from plotly.graph_objects import Figure as PlotlyFigure
+
+FIGURES = "figures"
+TABLES = "tables"
+INDEX = "index.html"
+
+
+@dataclass
+class ReportInputs:
+    """Everything a report is made of, as plain data.
+
+    Attributes:
+        runs: results rows (columns of ``bench.schema``).
+        studies: study name (``bench.studies.STUDIES``) → its table; missing names leave their section out.
+        adequacy: rows of the ``adequacy`` table (scene, model, simpler_model, precession_rate_diff,
+            trajectory_gap, note), possibly empty.
+        provenance: label → value lines shown at the top (matrix id, host, commit, ...).
+        include_seed: add the seed-revisited section (computes the seed study, a few seconds).
+        targets: target reference errors of the matched-accuracy summary.
+        interactive: draw the charts of index.html with plotly (else the static PNGs only).
+        static: write every chart's PNG and SVG under figures/ (else only those of the charts that are not
+            interactive, and of the seed section); REPORT.md shows the static files or links to index.html.
+        jobs: worker processes drawing the figures (1: in this process).
+        revisions: code revisions whose runs the database holds (``bench.history``); with more than one, the
+            report links its history page (``history/history.html``, ``reports.history_page``).
+    """
+
+    runs: pd.DataFrame
+    studies: dict[str, pd.DataFrame] = field(default_factory=dict)
+    adequacy: pd.DataFrame = field(default_factory=pd.DataFrame)
+    provenance: dict[str, str] = field(default_factory=dict)
+    include_seed: bool = True
+    targets: tuple[float, ...] = DEFAULT_TARGETS
+    interactive: bool = True
+    static: bool = True
+    jobs: int = 1
+    revisions: int = 1
+
+
+def file_stem(name: str) -> str:
+    """A file-name part for a scene name, the same on every file system and distinct for distinct names.
+
+    Scene names hold letters, digits, ``_``, ``.`` and ``-`` (``bench.problems.scenes.SCENE_NAME_PATTERN``).
+    A dot would start a file suffix (``seed_v1.5`` and ``seed_v1.6`` would share ``seed_v1``), and names that
+    differ only in case collide on case-insensitive file systems, so ``-`` escapes: ``-`` → ``--``, ``.`` →
+    ``-_``, an upper-case letter X → ``-x``. The escape is prefix-free, hence one-to-one; lower-case names
+    without dots or dashes (every built-in scene) are unchanged."""
+    parts = []
+    for character in name:
+        if character == "-":
+            parts.append("--")
+        elif character == ".":
+            parts.append("-_")
+        elif character.isupper():
+            parts.append("-" + character.lower())
+        else:
+            parts.append(character)
+    return "".join(parts)
+
+
+def scene_page(scene: str) -> str:
+    """The file name of a scene's page."""
+    return f"scene_{file_stem(scene)}.html"
+
+
+_PENDING: list[Callable[[], list[Block]]] = []
+"""The figures of the report being built, read by the worker processes of ``Builder.draw_figures`` (which
+inherit it by fork: nothing is pickled but the blocks they return)."""
+
+
+def _draw_pending(position: int) -> tuple[int, list[Block]]:
+    return position, _PENDING[position]()
+
+
+def _fork_context() -> multiprocessing.context.BaseContext | None:
+    """The fork start method where the platform has it (worker processes inherit the figures to draw), else
+    ``None`` (the figures are drawn in this process)."""
+    return multiprocessing.get_context("fork") if "fork" in multiprocessing.get_all_start_methods() else None
+
+
+@dataclass
+class _Pending:
+    """A place kept for the blocks ``draw()`` returns: its page, its index there, what it is (progress bar) and
+    the digest of its inputs (``figure_cache.digest``; ``None``: always drawn)."""
+
+    page: Page
+    place: int
+    what: str
+    draw: Callable[[], list[Block]]
+    key: str | None
+    long: bool = False
+    blocks: list[Block] = field(default_factory=list)
+
+
+class Builder:
+    """Collects the pages' blocks while writing the figures and tables they point to.
+
+    ``previous``: the folder of the previous build of this report (the figure cache is read from it; ``None``:
+    ``folder`` itself)."""
+
+    def __init__(self, folder: Path, progress: bool, interactive: bool, static: bool = True, jobs: int = 1,
+                 previous: Path | None = None):
+        self.folder = folder
+        self.interactive = interactive
+        self.static = static
+        self.progress = progress
+        self.jobs = jobs
+        self.cache = FigureCache(folder, previous if previous is not None else folder)
+        self.pages: list[Page] = []
+        self.current = self.page(INDEX, "front page")
+        self.pending: list[_Pending] = []
+
+    def page(self, file: str, title: str) -> Page:
+        """Make page ``file`` (created with ``title`` on first use) the one blocks are added to; return it."""
+        found = next((page for page in self.pages if page.file == file), None)
+        if found is None:
+            found = Page(file, title, [])
+            self.pages.append(found)
+        self.current = found
+        return found
+
+    def add(self, *blocks: Block) -> None:
+        self.current.blocks.extend(blocks)
+
+    def later(self, what: str, draw: Callable[[], list[Block]], long: bool = False, key: object = None) -> None:
+        """Keep a place for the blocks ``draw()`` returns (figures, which ``draw_figures`` draws in parallel);
+        ``what`` names them in the progress bar; ``long`` starts them first; ``key``: everything the blocks
+        depend on (hashed with the drawing code's version), or ``None`` to draw them on every build (as when
+        ``key`` holds a lambda or a closure, whose captured data the hash cannot see)."""
+        try:
+            found = None if key is None else digest((what, key), self.folder)
+        except Unhashable:
+            found = None
+        self.pending.append(_Pending(self.current, len(self.current.blocks), what, draw, found, long))
+        self.current.blocks.append(Paragraph(""))
+
+    def figure(self, name: str, caption: str, draw: Callable[[Path], Path],
+               draw_interactive: Callable[[], PlotlyFigure] | None = None, beside: bool = False) -> None:
+        """Add a chart to the page; ``draw_figures`` later writes the static chart ``draw(stem)`` under figures/
+        (when the report is static) and, when the report is interactive, puts the plotly figure
+        ``draw_interactive()`` on the page; ``beside``: to the right of the table just added."""
+        static = self.static or not (self.interactive and draw_interactive is not None)
+        block = Figure(f"{FIGURES}/{name}", caption, static=static, beside=beside)
+        on_page = draw_interactive if self.interactive else None
+        self.later(name, partial(_render_figure, block, self.folder / FIGURES / name, draw, on_page),
+                   key=(block, draw, on_page))
+
+    def curves(self, name: str, caption: str, draw: Callable[[pd.DataFrame], MplFigure], table: pd.DataFrame) -> None:
+        """A chart of curves drawn with matplotlib (``draw(table)``): saved under figures/, and on the page
+        converted to plotly (``interactive.from_matplotlib``)."""
+        block = Figure(f"{FIGURES}/{name}", caption, static=self.static or not self.interactive)
+        self.later(name, partial(_render_curves, block, self.folder / FIGURES / name, draw, table, self.interactive),
+                   key=(block, draw, table, self.interactive))
+
+    def table(self, frame: pd.DataFrame, name: str, title: str, notes: dict[str, str] | None = None,
+              collapsible: bool = False, details: str | None = None) -> None:
+        """Write ``frame``'s files under tables/ and show it (folded when ``collapsible``; ``details``: a text
+        column shown as a folded row under each row instead of a cell)."""
+        shown = write_table_files(frame, self.folder, f"{TABLES}/{name}", title, tables.COLUMN_FORMATS)
+        self.add(Table(title, shown, f"{TABLES}/{name}", tables.notes_for(frame, notes), collapsible, details))
+
+    def draw_figures(self) -> None:
+        """Draw the pending figures not in the cache, on ``jobs`` worker processes when there are several, with a
+        bar that knows the total (and so shows an ETA) and names the figure last drawn; blocks keep their
+        order. Writes the cache of this build (``figure_cache``)."""
+        todo = []
+        for task in self.pending:
+            reused = self.cache.reuse(task.key) if task.key is not None else None
+            if reused is None:
+                todo.append(task)
+            else:
+                task.blocks = reused
+        bar = tqdm(total=len(todo), desc=f"report figures ({len(self.pending) - len(todo)} unchanged)",
+                   unit="figure", disable=not self.progress, leave=False)
+        context = _fork_context()
+        jobs = min(self.jobs, len(todo))
+        order = sorted(todo, key=lambda task: not task.long)
+        _PENDING[:] = [task.draw for task in order]
+        try:
+            if jobs > 1 and context is not None:
+                with context.Pool(jobs) as pool:
+                    self._collect(order, pool.imap_unordered(_draw_pending, range(len(order))), bar)
+            else:
+                self._collect(order, map(_draw_pending, range(len(order))), bar)
+        finally:
+            _PENDING.clear()
+            bar.close()
+        for task in sorted(self.pending, key=lambda task: -task.place):
+            task.page.blocks[task.place:task.place + 1] = task.blocks
+        self.cache.write({task.key: task.blocks for task in self.pending if task.key is not None},
+                         drawn=[task.what for task in todo], reused=[task.what for task in self.pending
+                                                                     if task not in todo])
+        self.pending = []
+
+    @staticmethod
+    def _collect(order: list[_Pending], results: Iterator[tuple[int, list[Block]]], bar: tqdm) -> None:
+        """Store each task's blocks (``results``: position in ``order``, blocks, in any order), counted on
+        ``bar``."""
+        for position, blocks in results:
+            order[position].blocks = blocks
+            bar.set_postfix_str(f"drew {order[position].what}", refresh=False)
+            bar.update()
+
+
+def _render_figure(block: Figure, stem: Path, draw: Callable[[Path], Path],
+                   draw_interactive: Callable[[], PlotlyFigure] | None) -> list[Block]:
+    """Draw one chart: its static files when ``block.static``, its plotly figure when ``draw_interactive``."""
+    if block.static:
+        draw(stem)
+    if draw_interactive is not None:
+        plot = draw_interactive()
+        block.interactive, block.points = plot.to_json(), interactive.drawn_points(plot)
+    return [block]
+
+
+def _render_curves(block: Figure, stem: Path, draw: Callable[[pd.DataFrame], MplFigure], table: pd.DataFrame,
+                   on_page: bool) -> list[Block]:
+    """Draw one matplotlib chart ``draw(table)``: its static files when ``block.static``, and its plotly
+    conversion when ``on_page``."""
+    figure = draw(table)
+    if block.static:
+        chart_style.save(figure, stem)
+    if on_page:
+        plot = interactive.from_matplotlib(figure)
+        block.interactive, block.points = plot.to_json(), interactive.drawn_points(plot)
+    return [block]
