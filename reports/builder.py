@@ -22,7 +22,7 @@ from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS
 from matplotlib.figure import Figure as MplFigure
 from tqdm import tqdm
 
-from foucault_bench.reports import chart_style, interactive, tables
+from foucault_bench.reports import chart_style, interactive, plotly_conversion, tables
 from foucault_bench.reports.document import Block, Figure, Page, Paragraph, Table, write_table_files
 from foucault_bench.reports.figure_cache import FigureCache, Unhashable, digest
 
@@ -176,7 +176,7 @@ class Builder:
 
     def curves(self, name: str, caption: str, draw: Callable[[pd.DataFrame], MplFigure], table: pd.DataFrame) -> None:
         """A chart of curves drawn with matplotlib (``draw(table)``): saved under figures/, and on the page
-        converted to plotly (``interactive.from_matplotlib``)."""
+        converted to plotly (``plotly_conversion.from_matplotlib``)."""
         block = Figure(f"{FIGURES}/{name}", caption, static=self.static or not self.interactive)
         self.later(name, partial(_render_curves, block, self.folder / FIGURES / name, draw, table, self.interactive),
                    key=(block, draw, table, self.interactive))
@@ -250,6 +250,6 @@ def _render_curves(block: Figure, stem: Path, draw: Callable[[pd.DataFrame], Mpl
     if block.static:
         chart_style.save(figure, stem)
     if on_page:
-        plot = interactive.from_matplotlib(figure)
+        plot = plotly_conversion.from_matplotlib(figure)
         block.interactive, block.points = plot.to_json(), interactive.drawn_points(plot)
     return [block]

@@ -3,7 +3,7 @@ integrator and setting, and the work-precision of the worst member and of the me
 
 Only draws: the member rows, the summary and the worst and median members come from
 ``bench.ensembles.summary``. The charts are matplotlib figures, shown on the page converted to plotly
-(``reports.interactive.from_matplotlib``, through the builder's ``curves``) and saved as PNG + SVG for a static
+(``reports.plotly_conversion.from_matplotlib``, through the builder's ``curves``) and saved as PNG + SVG for a static
 report. The swept parameter is the ensemble's first swept field (a member's other fields, when it sweeps
 several, are in its name in the summary table).
 """

@@ -21,7 +21,8 @@ from matplotlib.figure import Figure as MplFigure
 from foucault_bench.bench.atomic import replacing_folder
 from foucault_bench.bench.studies import SeedStudy, seed_revisited
 from foucault_bench.reports.chart_style import integrator_style, save
-from foucault_bench.reports.interactive import drawn_points, from_matplotlib
+from foucault_bench.reports.interactive import drawn_points
+from foucault_bench.reports.plotly_conversion import from_matplotlib
 from foucault_bench.reports.document import Block, Figure, Heading, Paragraph
 from foucault_bench.reports.html_page import write_document
 

@@ -1,7 +1,7 @@
 """The report's static charts of the study tables (``bench.studies``): long-time energy, stability and growth with
 rotation, precession against latitude and against the release direction, and model adequacy. Each function reads
 one table and returns a matplotlib figure; the report saves it (``chart_style.save``) and converts it for the page
-(``reports.interactive.from_matplotlib``). Conventions: ``reports.chart_style``.
+(``reports.plotly_conversion.from_matplotlib``). Conventions: ``reports.chart_style``.
 """
 
 from __future__ import annotations

@@ -223,7 +223,7 @@ def test_advise_worst_against_a_recomputation(database: Path) -> None:
 def test_report_charts_read_back_against_the_database(database: Path) -> None:
     """Each ensemble chart's plotly data (what the page embeds) holds the stored members' values."""
     from foucault_bench.bench.run.store import ResultsStore
-    from foucault_bench.reports import ensembles, interactive
+    from foucault_bench.reports import ensembles, plotly_conversion
     from foucault_bench.reports.builder import file_stem
 
     class Recorder:
@@ -238,7 +238,7 @@ def test_report_charts_read_back_against_the_database(database: Path) -> None:
             self.tables.append(frame)
 
         def curves(self, name, caption, draw, table) -> None:
-            self.charts[name] = interactive.from_matplotlib(draw(table))
+            self.charts[name] = plotly_conversion.from_matplotlib(draw(table))
 
     with ResultsStore(database, create=False) as store:
         frame = store.frame()

@@ -5,7 +5,7 @@ code that drew the chart: titles name the right scene and verdict, each integrat
 runs' (cost, error) pairs, diverged and failed runs are all drawn above the data, the Pareto trace is the
 brute-force non-dominated set, captions count what is drawn, PNGs of different data differ; and every element of
 a static matplotlib chart (lines, reference lines, markers, spans, error bars, tick labels, panel titles) has its
-counterpart in the interactive version (``reports.interactive.from_matplotlib``)."""
+counterpart in the interactive version (``reports.plotly_conversion.from_matplotlib``)."""
 
 from __future__ import annotations
 
@@ -474,7 +474,7 @@ def synthetic_study_tables() -> dict[str, pd.DataFrame]:
 
 def test_study_charts_keep_every_element_in_their_interactive_version() -> None:
     from foucault_bench.reports import study_charts as static_charts
-    from foucault_bench.reports.interactive import from_matplotlib
+    from foucault_bench.reports.plotly_conversion import from_matplotlib
 
     tables = synthetic_study_tables()
     figures = {"stability": static_charts.stability(tables["stability"]),
