@@ -331,10 +331,15 @@ class Model:
         variables = [variable for variable, _ in system]
         derivatives = [heyoka.diff(rhs, variable) for _, rhs in system for variable in variables]
         compiled = heyoka.cfunc(derivatives, vars=variables)
+        # the compiled derivatives take as many parameters as they read: fewer than the right-hand side when a
+        # parameter only adds a term that does not depend on the state (a constant force), whose derivatives vanish
+        read = heyoka.get_params(derivatives)
+        count = 1 + max((index for index in range(self.heyoka_parameter_count) if heyoka.par[index] in read),
+                        default=-1)
         heyoka_parameters = self.heyoka_parameters
 
         def jacobian_into(t, y, out, p):
-            compiled(y, pars=heyoka_parameters(p), outputs=np.reshape(out, -1, copy=False))  # raises rather than copy
+            compiled(y, pars=heyoka_parameters(p)[..., :count], outputs=np.reshape(out, -1, copy=False))  # raises rather than copy
 
         return jacobian_into
 

@@ -29,6 +29,14 @@ def linear_energy(m, x, y, vx, vy, p):
     return 0.5 * (vx * vx + vy * vy) + 0.5 * p[P_K2] * (x * x + y * y)
 
 
+def pushed_force(m, x, y, z, vx, vy, vz, p):
+    """Linear model plus a constant push along x read from the last parameter slot: a term whose derivatives
+    with respect to the state vanish, so the Jacobian reads fewer parameters than the right-hand side."""
+    k2 = p[P_K2]
+    a = p[P_OMEGA_Z]
+    return -k2 * x + 2.0 * a * vy + 1e-3 * p[PARAMETER_COUNT - 1], -k2 * y - 2.0 * a * vx, 0.0 * z
+
+
 DAMPED = Model(name="damped_linear_test", title="damped linear (test)", geometry="plane", free_force=damped_force,
                energy=linear_energy, energy_name="E", conserves_energy=False, hamiltonian=False, refines=("linear",))
 LAB = PendulumParameters(length_m=3.0, latitude_deg=48.846, amplitude_m=0.3)
@@ -197,3 +205,17 @@ def test_a_refinement_at_its_parents_values_adds_no_adequacy_row_and_no_referenc
     assert rows[STIFFENED.name]["simpler_model"] == "linear"
     # a 10 % stiffer spring shifts the swing frequency by ≈ 5 %: the trajectories part by O(A) within 120 s
     assert rows[STIFFENED.name]["trajectory_gap"] > 0.1
+
+
+def test_the_jacobian_of_a_model_with_a_constant_push_is_the_linear_models() -> None:
+    """A parameter that only adds a state-independent term is absent from the derivatives; the compiled
+    Jacobian must still take the parameter vector (heyoka refuses a longer one) and give the linear model's."""
+    pushed = Model(name="pushed_linear_test", title="pushed linear (test)", geometry="plane",
+                   free_force=pushed_force, energy=linear_energy, energy_name="E", conserves_energy=False,
+                   hamiltonian=False, refines=("linear",))
+    vector = LAB.parameter_vector()
+    state = np.array([0.1, -0.2, 0.03, 0.04])
+    ours, linear = np.empty((4, 4)), np.empty((4, 4))
+    pushed.jacobian_into(0.0, state, ours, vector)
+    MODELS["linear"].jacobian_into(0.0, state, linear, vector)
+    np.testing.assert_array_equal(ours, linear)
