@@ -12,6 +12,7 @@ from functools import partial
 
 import pandas as pd
 
+from foucault_bench.bench.ensembles.summary import single_scene_rows
 from foucault_bench.bench.problems.scenes import SCENES
 from foucault_bench.bench.verdicts.pareto import ERROR_METRICS, cost_column, pareto_front
 from foucault_bench.integrators import REGISTRY, STATUS_OK
@@ -106,7 +107,7 @@ def decisions(builder: Builder, inputs: ReportInputs) -> None:
 
 def scene_pages(builder: Builder, inputs: ReportInputs) -> None:
     """One page per scene: each verdict against cost, convergence, tolerance, and the scene's runs."""
-    runs = inputs.runs
+    runs = single_scene_rows(inputs.runs)  # an ensemble's members: its own section (reports.ensembles)
     orders = tables.convergence_orders(runs)
     for scene, scene_runs in runs.groupby("scene", sort=True):
         builder.page(scene_page(str(scene)), f"scene {scene}")
@@ -165,10 +166,12 @@ def recommendations(builder: Builder, inputs: ReportInputs) -> None:
     builder.add(Heading("Which method for my scene"), Paragraph(
         f"Per scene and target reference error, the cheapest integrator and setting that meets it (by "
         f"{_cost_words(runs)}), the runner-up integrator and its cost ratio; beside it the scene's reference "
-        "error against cost. The full summary, the Pareto fronts and every other chart follow."))
+        "error against cost. The full summary, the Pareto fronts and every other chart follow. An ensemble's "
+        "members are shown together in the section Ensembles (`foucault-bench advise --worst` recommends for its "
+        "worst member)."))
     summary = tables.matched_accuracy(runs, targets)
     cost = cost_column(runs)
-    for scene, scene_runs in runs.groupby("scene", sort=True):
+    for scene, scene_runs in single_scene_rows(runs).groupby("scene", sort=True):
         rows = summary[summary["scene"] == scene]
         columns = [*RECOMMENDATION_COLUMNS[:6], cost, *RECOMMENDATION_COLUMNS[6:]]
         builder.table(rows[columns].reset_index(drop=True), f"recommendation_{file_stem(str(scene))}",

@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from foucault_bench.bench.errors import InputError
@@ -327,3 +328,27 @@ def test_a_version_4_database_gets_the_ensemble_columns(tmp_path: Path) -> None:
         stored = {line[1] for line in connection.execute("PRAGMA table_info(runs)")}
     connection.close()
     assert set(added) <= stored
+
+
+def test_members_get_no_scene_page_or_recommendation_of_their_own(database: Path) -> None:
+    """The per-scene sections cover the scenes of their own; an ensemble's members are in its own section."""
+    from types import SimpleNamespace
+    from unittest.mock import MagicMock
+
+    from foucault_bench.bench.run.store import ResultsStore
+    from foucault_bench.reports import result_sections
+
+    with ResultsStore(database, create=False) as store:
+        frame = store.frame()
+    member = frame["scene"].iloc[0]
+    alone = frame[frame["scene"] == member].copy()
+    alone["scene"], alone["ensemble"] = "alone", None
+    runs = pd.concat([frame, alone], ignore_index=True)
+    inputs = SimpleNamespace(runs=runs, targets=(1e-3,))
+    pages = MagicMock()
+    result_sections.scene_pages(pages, inputs)
+    assert [call.args[1] for call in pages.page.call_args_list] == ["scene alone"]
+    front = MagicMock()
+    result_sections.recommendations(front, inputs)
+    assert [call.args[1] for call in front.table.call_args_list] == ["recommendation_alone"]
+    assert frame["ensemble"].notna().all() and len(set(frame["scene"])) > 1

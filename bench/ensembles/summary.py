@@ -35,6 +35,14 @@ def member_rows(frame: pd.DataFrame) -> pd.DataFrame:
     return frame[frame["ensemble"].notna()]
 
 
+def single_scene_rows(frame: pd.DataFrame) -> pd.DataFrame:
+    """The rows of scenes of their own (no ensemble member), in their stored order: the per-scene sections' rows
+    (an ensemble's members are shown together, per ensemble)."""
+    if "ensemble" not in frame.columns:
+        return frame
+    return frame[frame["ensemble"].isna()]
+
+
 def member_label(row: pd.Series) -> str:
     """A member as the summary names it: its scene name and swept values (``lab_3m_azimuths.az45``)."""
     return str(row["scene"])
