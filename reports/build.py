@@ -54,7 +54,7 @@ SECTIONS: list[Section] = [
     result_sections.convergence_orders,
     result_sections.adequacy,
     lambda builder, inputs: halls.add_section(builder, inputs.runs),
-    lambda builder, inputs: ensembles.add_section(builder, inputs.runs, file_stem),
+    lambda builder, inputs: ensembles.add_section(builder, inputs.runs),
     result_sections.scene_pages,
     study_sections.studies,
     study_sections.seed_section,

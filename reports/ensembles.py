@@ -11,7 +11,7 @@ several, are in its name in the summary table).
 from __future__ import annotations
 
 import json
-from typing import Any, Callable
+from typing import Any
 
 import pandas as pd
 from matplotlib.figure import Figure
@@ -20,6 +20,7 @@ from foucault_bench.bench.ensembles.summary import (
     ensemble_summary, median_rows, member_rows, swept_values, worst_rows,
 )
 from foucault_bench.reports import chart_style
+from foucault_bench.reports.builder import file_stem
 from foucault_bench.reports.document import Heading, Paragraph
 
 ENSEMBLE_VERDICTS = ("reference_error", "precession_rate_ref_error_earth", "energy_max_rel_error")
@@ -79,10 +80,10 @@ def work_precision_of(picked: dict[str, pd.DataFrame], verdict: str) -> Figure:
     return figure
 
 
-def add_section(builder: Any, runs: pd.DataFrame, file_stem: Callable[[str], str]) -> None:
+def add_section(builder: Any, runs: pd.DataFrame) -> None:
     """The section "Ensembles" (nothing when no row is an ensemble member): per ensemble, its summary table,
     each verdict against the swept parameter, and the work-precision of its worst and median members; file
-    names made from an ensemble's name by ``file_stem`` (``reports.build.file_stem``)."""
+    names made from an ensemble's name by ``reports.builder.file_stem``."""
     members = member_rows(runs)
     if members.empty:
         return

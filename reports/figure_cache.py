@@ -15,7 +15,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import hashlib
-import importlib
 import json
 import shutil
 from importlib.metadata import version
@@ -24,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from foucault_bench.bench.provenance import PACKAGE_ROOT, source_digest
 from foucault_bench.reports.document import Block, Figure, Heading, Paragraph
 
 CACHE_FOLDER = "cache"
@@ -36,15 +36,10 @@ LIBRARIES = ("matplotlib", "plotly", "numpy", "pandas")
 
 @functools.cache
 def code_version() -> str:
-    """A hash of the source of every module of the package and of the drawing libraries' versions."""
-    sha = hashlib.sha256()
-    for package in PACKAGES:
-        for folder in importlib.import_module(f"foucault_bench.{package}").__path__:
-            for path in sorted(Path(folder).rglob("*.py")):
-                sha.update(path.relative_to(folder).as_posix().encode() + b"\0" + path.read_bytes())
-    for library in LIBRARIES:
-        sha.update(f"{library}={version(library)}".encode())
-    return sha.hexdigest()
+    """A hash of the source of every module of the package and of the drawing libraries' versions
+    (``bench.provenance.source_digest``, as run keys hash theirs)."""
+    paths = sorted(path for package in PACKAGES for path in (PACKAGE_ROOT / package).rglob("*.py"))
+    return source_digest(",".join(f"{library}={version(library)}" for library in LIBRARIES), paths)
 
 
 class Unhashable(TypeError):

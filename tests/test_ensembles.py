@@ -225,7 +225,6 @@ def test_report_charts_read_back_against_the_database(database: Path) -> None:
     """Each ensemble chart's plotly data (what the page embeds) holds the stored members' values."""
     from foucault_bench.bench.run.store import ResultsStore
     from foucault_bench.reports import ensembles, plotly_conversion
-    from foucault_bench.reports.builder import file_stem
 
     class Recorder:
         def __init__(self) -> None:
@@ -244,7 +243,7 @@ def test_report_charts_read_back_against_the_database(database: Path) -> None:
     with ResultsStore(database, create=False) as store:
         frame = store.frame()
     recorder = Recorder()
-    ensembles.add_section(recorder, frame, file_stem)
+    ensembles.add_section(recorder, frame)
     rows = stored_rows(database)
     figure = recorder.charts["ensemble_fan_reference_error"]
     for trace in figure.data:
