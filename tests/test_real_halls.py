@@ -199,10 +199,11 @@ def test_the_balance_of_the_reference_closes_and_a_coarse_run_does_not(model_nam
 # --- the report's table "against the measurement" (reports/halls.py) ----------------------------------------------
 
 
-HALLS_MATRIX = {"name": "tiny_halls", "scenes": ["guelph", "guelph_support", "sion", "sion_support"],
+HALLS_MATRIX = {"name": "tiny_halls", "scenes": ["guelph", "guelph_support", "sion", "sion_support", "microfoucault",
+                                                "microfoucault_support"],
                 "integrators": ["dop853", "rk4"], "tol": [1e-6, 1e-8, 1e-10], "kh": [0.05]}
-"""The matrix whose rows the halls database holds: the Guelph and Sion scenes (Motala has no runs), three
-tolerances."""
+"""The matrix whose rows the halls database holds: the Guelph, Sion and MicroFoucault scenes (Motala has no runs),
+three tolerances."""
 SYNTHETIC_RATE_ERROR = {1e-6: 3e-9, 1e-8: 2e-12, 1e-10: -5e-11, 0.05: None}
 """Per tolerance (kh for rk4), the synthetic rate error of the run (rad/s, signed): the best run is the middle
 tolerance (not the first row nor the last); rk4 is the diverged run with the smallest error of all."""
@@ -252,10 +253,11 @@ def halls_database(tmp_path_factory):
     return database
 
 
-EXPECTED_TEXTBOOK_DEG_H = {"guelph": (10.36, 0.005), "sion": (360.0 / 33.26, 0.0005)}
+EXPECTED_TEXTBOOK_DEG_H = {"guelph": (10.36, 0.005), "sion": (360.0 / 33.26, 0.0005),
+                           "microfoucault": (360.0 / 33.26, 0.0005)}
 """Per hall of the tiny matrix, the textbook rate its source expects (°/h) and the rounding of that figure:
 Guelph's 10.36°/h to the 0.005 of its last digit; Sion's one turn in 33.26 h to its last digit (0.005 h, 0.0016°/h;
-the scene's latitude is that figure's, rounded to 0.001°)."""
+the scene's latitude is that figure's, rounded to 0.001°); the MicroFoucault, same maker and place, the same."""
 
 
 def test_the_table_against_the_measurement_is_recomputed_from_the_rows(halls_database) -> None:
@@ -276,12 +278,14 @@ def test_the_table_against_the_measurement_is_recomputed_from_the_rows(halls_dat
                 "ORDER BY precession_rate_ref_error_rad_s LIMIT 1", (scene,)).fetchone()
             return -rate * 180.0 / np.pi * 3600.0
         note = halls.closing_note(table)
-        assert list(table["hall"]) == ["guelph", "sion"]  # the file's order; Motala has no runs here
+        assert list(table["hall"]) == ["guelph", "sion", "microfoucault"]  # the file's order; Motala has no runs
         for hall, (textbook, rounding) in EXPECTED_TEXTBOOK_DEG_H.items():
             measured = measurements[hall]
             ideal, effect = best(measured["scene"]), best(measured["effects_scene"])
             row = table.set_index("hall").loc[hall]
             assert row["measured_deg_h"] == measured["measured_deg_h"]
+            assert row["range_kind"] == measured["range_kind"]
+            assert f"(mean {measured['measured_deg_h']:g}; the range: {measured['range_kind']})" in note
             assert row["ideal_deg_h"] == pytest.approx(ideal, rel=1e-12)
             assert row["with_effect_deg_h"] == pytest.approx(effect, rel=1e-12)
             # the long-time mean, recomputed from the closed form's statement: √(a² + (kε/2)²) while the plane turns
@@ -314,6 +318,32 @@ def test_every_measured_hall_has_its_scenes_a_source_and_a_range_about_its_rate(
         assert SCENES_OF_FILE[measured["effects_scene"]].params.support_anisotropy > 0.0
         assert measured["source"] and measured["uncertainty"]
         assert measured["low_deg_h"] < measured["measured_deg_h"] < measured["high_deg_h"]
+        # where the range comes from is stated, and a range the source does not publish says so in its words
+        assert measured["range_kind"] in halls.RANGE_KINDS
+        if not measured["range_kind"].startswith("published"):
+            assert "states no uncertainty" in measured["uncertainty"]
+
+
+def test_a_range_computed_from_published_readings_is_their_mean_and_standard_deviation() -> None:
+    """A measurement whose range is computed here (``readings_h``: the source's full-turn times, in hours) states
+    360°/mean as its rate and 360°/(mean ± one sample standard deviation) as its range, each to the 0.005°/h of
+    its last digit; the MicroFoucault's eight daily readings are such a measurement."""
+    import statistics
+    import tomllib
+
+    from foucault_bench.reports import halls
+
+    with open(halls.HALLS_FILE, "rb") as handle:
+        measurements = tomllib.load(handle)["measurement"]
+    computed = {hall: measured for hall, measured in measurements.items()
+                if measured["range_kind"] == "standard deviation of the published readings"}
+    assert "microfoucault" in computed
+    for measured in computed.values():
+        turns = measured["readings_h"]
+        mean, deviation = statistics.mean(turns), statistics.stdev(turns)
+        assert measured["measured_deg_h"] == pytest.approx(360.0 / mean, abs=0.005)
+        assert measured["low_deg_h"] == pytest.approx(360.0 / (mean + deviation), abs=0.005)
+        assert measured["high_deg_h"] == pytest.approx(360.0 / (mean - deviation), abs=0.005)
 
 
 SCENES_OF_FILE = {}
