@@ -420,3 +420,39 @@ def test_adequacy_compares_an_effect_only_where_a_scene_sets_it() -> None:
     ideal = dataclasses.replace(SCENES_OF_FILE["guelph"], name="guelph_short", duration_s=short_s)
     new_models = {"anisotropic_linear", "anisotropic_spherical", "damped_linear", "driven_linear"}
     assert not [row for row in model_adequacy(ideal) if {row["model"], row["simpler_model"]} & new_models]
+
+
+@pytest.mark.parametrize("model, effects, pairs", [
+    ("damped_linear", {"drag_linear_per_s": 1e-3}, [("damped_linear", "linear")]),
+    ("driven_linear", {"drag_linear_per_s": 1e-3, "drive_gain_per_s": 2e-3, "drive_radius_m": 0.02},
+     [("driven_linear", "linear"), ("driven_linear", "damped_linear")]),
+])
+def test_adequacy_rows_of_drag_and_drive_are_the_references_differences(model: str, effects: dict,
+                                                                        pairs: list) -> None:
+    """A scene with drag (and a drive) gets a row against each simpler model of the hierarchy and none against a
+    richer one at its defaults (a damped scene has no drive: no driven_linear row); each row's rate difference and
+    trajectory gap are recomputed here from the two real128 references. The linear drag's gap is, to the relative
+    γ/k and (a/k) by which the swing's phase and ellipse differ, the decay of the amplitude A(1 − e^{−γt/2}): it
+    is measured on the output grid, which meets no turning point exactly, so it may fall short of it by the grid's
+    cos(kΔ/2) ≥ 0.92."""
+    from foucault_bench.bench.problems.turning_points import rate_scale
+    from foucault_bench.bench.verdicts.adequacy import model_adequacy
+
+    hall = SCENES_OF_FILE["guelph"]
+    short_s = 512 * hall.output_interval_s
+    scene = dataclasses.replace(hall, name=f"guelph_{model}_short", model=model, duration_s=short_s,
+                                params=dataclasses.replace(hall.params, **effects))
+    rows = model_adequacy(scene)
+    assert [(row["model"], row["simpler_model"]) for row in rows] == pairs
+    for row in rows:
+        richer = reference_for(dataclasses.replace(scene, model=row["model"], name=f"{scene.name}.{row['model']}"))
+        simpler = reference_for(dataclasses.replace(scene, model=row["simpler_model"],
+                                                    name=f"{scene.name}.{row['simpler_model']}"))
+        expected = (simpler.precession_rate_rad_s - richer.precession_rate_rad_s) / rate_scale(scene.params)
+        assert row["precession_rate_diff"] == pytest.approx(expected, rel=1e-12)
+        assert row["trajectory_gap"] == pytest.approx(position_error(simpler.y, richer.y, scene.params.amplitude_m),
+                                                      rel=1e-12)
+    if model == "damped_linear":
+        decay = 1.0 - np.exp(-0.5 * effects["drag_linear_per_s"] * short_s)
+        grid = np.cos(0.5 * scene.params.pendulum_frequency_rad_s * scene.output_interval_s)
+        assert 0.99 * grid * decay <= rows[0]["trajectory_gap"] <= 1.01 * decay, (rows[0]["trajectory_gap"], decay)
