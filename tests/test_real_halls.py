@@ -266,9 +266,12 @@ def test_the_table_against_the_measurement_is_recomputed_from_the_rows(halls_dat
 
     from foucault_bench.bench.run.store import ResultsStore
     from foucault_bench.reports import halls
+    from foucault_bench.reports.document import display_frame
+    from foucault_bench.reports.tables import COLUMN_FORMATS
 
     with ResultsStore(halls_database) as store:
         table = halls.against_measurement(store.frame())
+    shown = display_frame(table, COLUMN_FORMATS)
     with open(halls.HALLS_FILE, "rb") as handle:
         measurements = tomllib.load(handle)["measurement"]
     with sqlite3.connect(halls_database) as connection:
@@ -287,6 +290,9 @@ def test_the_table_against_the_measurement_is_recomputed_from_the_rows(halls_dat
             assert row["range_kind"] == measured["range_kind"]
             assert f"(mean {measured['measured_deg_h']:g}; the range: {measured['range_kind']})" in note
             assert row["ideal_deg_h"] == pytest.approx(ideal, rel=1e-12)
+            # as the report prints it: to the 0.01°/h the sources quote (Guelph's 10.36 and 10.38 stay apart)
+            cells = shown.set_index("hall").loc[hall]
+            assert (cells["ideal_deg_h"], cells["measured_deg_h"]) == (f"{ideal:.2f}", f"{measured['measured_deg_h']:.2f}")
             assert row["with_effect_deg_h"] == pytest.approx(effect, rel=1e-12)
             # the long-time mean, recomputed from the closed form's statement: √(a² + (kε/2)²) while the plane turns
             params = SCENES_OF_FILE[measured["effects_scene"]].params
