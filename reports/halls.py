@@ -5,7 +5,8 @@ real_halls.toml, ``[measurement.NAME]`` tables) beside what the suite predicts f
 Per measured hall, in degrees per hour clockwise seen from above (the sources' convention; the suite's signed
 rate is counter-clockwise positive, so each is minus the stored ``precession_rate_rad_s``):
 
-* the measured rate and its range (the source's uncertainty or spread);
+* the measured rate, its range and where the range comes from (``RANGE_KINDS``: an uncertainty or spread the source
+  publishes, one computed here from the readings it publishes, or this suite's reading of a record stating none);
 * the ideal model's prediction: the rate of the hall's ideal scene, from its most accurate ok run (smallest
   ``precession_rate_ref_error_rad_s``: the closest to the real128 reference) over the scene's duration;
 * the prediction with the effect the scene needs, measured the same way on the effects scene: over a scene of
@@ -36,6 +37,10 @@ from foucault_bench.reports.document import Heading, Paragraph
 
 DEG_H_PER_RAD_S = 180.0 / math.pi * 3600.0
 HALLS_FILE = SCENE_DIRECTORY / "real_halls.toml"
+RANGE_KINDS = ("published standard deviation", "published spread", "standard deviation of the published readings",
+               "a reading, no uncertainty published")
+"""Where a measurement's range comes from (its ``range_kind``): the first two are the source's own, the third is
+computed here from the readings the source publishes, the last is this suite's reading of a record."""
 
 
 def measurements() -> dict[str, dict[str, Any]]:
@@ -68,6 +73,7 @@ def against_measurement(runs: pd.DataFrame) -> pd.DataFrame:
             "hall": hall,
             "measured_deg_h": measured["measured_deg_h"],
             "measured_range_deg_h": f"{low:g} to {high:g}",
+            "range_kind": measured["range_kind"],
             "ideal_deg_h": ideal,
             "with_effect_deg_h": effects,
             "with_effect_long_time_deg_h": long_time,
@@ -87,7 +93,8 @@ def closing_note(table: pd.DataFrame) -> str:
         long_place = "inside" if row.long_time_inside else "outside"
         sentences.append(
             f"{row.hall}: the ideal prediction {row.ideal_deg_h:.2f}°/h lies {ideal_place} the measured "
-            f"{row.measured_range_deg_h}°/h (mean {row.measured_deg_h:g}); with the support anisotropy the "
+            f"{row.measured_range_deg_h}°/h (mean {row.measured_deg_h:g}; the range: {row.range_kind}); with the "
+            f"support anisotropy the "
             f"long-time mean {row.with_effect_long_time_deg_h:.2f}°/h lies {long_place} it ({row.effect})")
     return ". ".join(sentences) + "." if sentences else ""
 
@@ -105,8 +112,10 @@ def _add_measurement(builder: Any, runs: pd.DataFrame) -> None:
         return
     builder.add(Heading("Against the measurement"), Paragraph(
         "Real halls with published measured precession rates (bench/scenes/real_halls.toml), in °/h clockwise "
-        "seen from above: the measurement, the ideal model, the model with the effect the scene needs over the "
-        "scene, and its long-time mean from the closed form (models/README.md \"Anisotropic support\")."))
+        "seen from above: the measurement, its range and where that range comes from (published by the source, "
+        "computed here from the readings it publishes, or read here from a record that states none), the ideal "
+        "model, the model with the effect the scene needs over the scene, and its long-time mean from the closed "
+        "form (models/README.md \"Anisotropic support\")."))
     builder.table(table, "against_measurement", "Against the measurement")
     builder.add(Paragraph(closing_note(table)))
 

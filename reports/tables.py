@@ -101,9 +101,14 @@ KH_COLUMNS: frozenset[str] = frozenset({"kh", "stability_limit_kh", "declared_li
                                         "first_diverged_kh", "kh_below_limit", "largest_kh_not_diverged"})
 ORDER_FORMAT = ".2f"
 """A fitted order with two decimals, as the convergence charts' legends write it (``fitted order 6.00``)."""
+RATE_DEG_H_FORMAT = ".2f"
+"""A precession rate in °/h with two decimals, the resolution the real halls' sources quote (Guelph's measured 10.38
+against its predicted 10.36; three significant digits would print both as 10.4)."""
+RATE_DEG_H_COLUMNS = ("measured_deg_h", "ideal_deg_h", "with_effect_deg_h", "with_effect_long_time_deg_h")
+"""The rate columns of the table "Against the measurement" (``reports.halls.against_measurement``)."""
 COLUMN_FORMATS: dict[str, str] = {
     **{column: ".0f" for column in INTEGER_COLUMNS}, **{column: KH_FORMAT for column in KH_COLUMNS},
-    "fitted_order": ORDER_FORMAT,
+    **{column: RATE_DEG_H_FORMAT for column in RATE_DEG_H_COLUMNS}, "fitted_order": ORDER_FORMAT,
 }
 """Column → format specification of its printed cells (``reports.document.display_frame``; other reals: three
 significant digits)."""

@@ -1,4 +1,5 @@
-"""Every adaptive integrator on the models of ``ADAPTIVE_MODELS``: runs, accuracy against the real128 reference, counters, turning
+"""Every adaptive integrator on the models of ``ADAPTIVE_MODELS`` (and on the real-pendulum models of
+``REFINED_MODELS`` at their example parameters): runs, accuracy against the real128 reference, counters, turning
 points, failures and settings.
 
 Scene: the Panthéon pendulum (L = 67 m, φ = 48.846°, A = 3 m) for 120 s (7 swings, 14 turning points), output
@@ -84,11 +85,15 @@ def grid_turning_points(solution: Solution, model_name: str) -> np.ndarray:
 
 
 ADAPTIVE_MODELS = ("linear", "seed_planar", "spherical")
-"""The models the adaptive drivers are run on here: the three ideal ones (one per kind of right-hand side: linear,
-velocity-dependent planar, constrained spherical). The real-pendulum models refine them with force terms that are
-zero at this module's scene (the Panthéon's parameters set no anisotropy, drag or drive), so they would repeat
-these runs; their right-hand sides are checked against heyoka's at their example parameters
-(tests/test_heyoka_rhs.py) and their order on every fixed-step integrator (tests/test_selftest.py)."""
+"""The models the adaptive drivers are run on here at this module's scene: the three ideal ones (one per kind of
+right-hand side: linear, velocity-dependent planar, constrained spherical). The real-pendulum models refine them
+with force terms that are zero at the Panthéon's parameters (no anisotropy, drag or drive): they are run at their
+declared example parameters instead (``REFINED_MODELS``), where those terms act; their right-hand sides are also
+checked against heyoka's there (tests/test_heyoka_rhs.py) and their order on every fixed-step integrator
+(tests/test_selftest.py)."""
+REFINED_MODELS = tuple(name for name in MODELS if name not in ADAPTIVE_MODELS)
+"""The real-pendulum models (an anisotropic support, drag, a drive), each run at ``Model.with_example_parameters``
+of this module's scene."""
 
 
 def test_the_library_drivers_are_discovered() -> None:
@@ -141,6 +146,54 @@ def test_error_against_the_reference_shrinks_with_the_tolerance(name: str, model
     tight = scaled_error(run(name, model_name, TIGHT), model_name)
     assert tight <= loose / SHRINK_FACTOR, (loose, tight)
     assert tight <= GLOBAL_OVER_LOCAL * TIGHT
+
+
+@functools.cache
+def refined_run(name: str, model_name: str, tol: float) -> Solution:
+    """``name`` on the real-pendulum model ``model_name`` at its example parameters (the scene's pendulum)."""
+    model = MODELS[model_name]
+    return get_integrator(name).solve(Problem(model, model.with_example_parameters(SCENE), T_OUT), tol=tol)
+
+
+TAYLOR_ON_QUADRATIC_DRAG = ("heyoka's error on the quadratic drag is not controlled by its tolerance: 1.7e-5 at "
+                            "tol 1e-10, 5.9e-5 at 1e-6 (6e-12 at 1e-14; the linear drag alone: 1e-12). Likely "
+                            "cause: the smoothed speed √(|v|² + c²), c = 1e-3 m/s, has complex-time singularities "
+                            "c/(k²A) = 2 ms from every turning point, which steps of 0.7 s sized from the last "
+                            "Taylor coefficients do not see. Open: models/README.md \"Drag and drive\"")
+
+
+def refined_cases() -> list:
+    """(integrator, model) for every adaptive integrator and real-pendulum model; the Taylor integrators on the
+    quadratic drag are a known failure (strict: the test fails once they pass, so that the mark is removed)."""
+    cases = []
+    for name in ADAPTIVE:
+        for model_name in REFINED_MODELS:
+            taylor = issubclass(type(get_integrator(name)), HeyokaTaylor)
+            marks = [pytest.mark.xfail(strict=True, reason=TAYLOR_ON_QUADRATIC_DRAG)] if (
+                taylor and model_name == "damped_linear") else []
+            cases.append(pytest.param(name, model_name, marks=marks, id=f"{name}-{model_name}"))
+    return cases
+
+
+@pytest.mark.parametrize("name, model_name", refined_cases())
+def test_the_real_pendulum_models_run_and_converge_on_every_adaptive_integrator(name: str, model_name: str) -> None:
+    """Each adaptive integrator on each real-pendulum model where its terms act: an ok run with its counters, and
+    an error against the real128 reference that shrinks with the tolerance by the same factors as on the ideal
+    models (the refinements add smooth force terms: drag, a drive, a stiffer axis; no new stiffness at these
+    parameters), so a driver that mishandles a refined model's right-hand side or Jacobian fails here."""
+    assert not MODELS[model_name].equals_parents_at(MODELS[model_name].with_example_parameters(SCENE))
+    reference_solution = refined_run("heyoka_taylor_quad", model_name, REFERENCE_TOLERANCE)
+    assert reference_solution.status == "ok", reference_solution.message
+    errors = {}
+    for tol in (LOOSE, TIGHT):
+        solution = refined_run(name, model_name, tol)
+        assert solution.status == "ok" and solution.message == "", solution.message
+        assert solution.tolerance == tol and isinstance(solution.nfev, int) and solution.nfev > 0
+        if solution.steps is not None:
+            assert 0 < solution.steps <= solution.nfev
+        errors[tol] = float(np.max(np.abs(solution.y - reference_solution.y) / state_scale(SCENE)))
+    assert errors[TIGHT] <= errors[LOOSE] / SHRINK_FACTOR, errors
+    assert errors[TIGHT] <= GLOBAL_OVER_LOCAL * TIGHT, errors
 
 
 @pytest.mark.parametrize("model_name", ADAPTIVE_MODELS)

@@ -240,6 +240,36 @@ def test_the_readme_scene_table_is_the_default_matrix() -> None:
     assert listed == expected, f"README.md's scene table lists {listed}; the default matrix has {expected}"
 
 
+def test_the_run_counts_of_the_built_in_matrices_in_bench_readme_are_their_own() -> None:
+    """bench/README.md "Benchmark matrices": each built-in matrix's row states the number of runs it holds (a scene
+    added to the halls or the ensembles fails here until the table says so)."""
+    from foucault_bench.bench.run.matrix import built_in_matrices
+
+    rows = markdown_rows(ROOT / "bench" / "README.md", "| matrix | what it is for | runs |")
+    stated = {row[0]: int(row[2]) for row in rows}
+    assert set(stated) == set(built_in_matrices())
+    wrong = {name: (count, len(load_matrix(name).runs)) for name, count in stated.items()
+             if count != len(load_matrix(name).runs)}
+    assert not wrong, f"bench/README.md states (runs, actual) {wrong}"
+
+
+def test_the_real_halls_table_is_the_measurements() -> None:
+    """models/README.md "Real halls": one row per ``[measurement.NAME]`` of bench/scenes/real_halls.toml, in the
+    file's order, each citing that measurement's site and stating its rate and range."""
+    import tomllib
+
+    from foucault_bench.reports.halls import HALLS_FILE
+
+    with open(HALLS_FILE, "rb") as handle:
+        measurements = list(tomllib.load(handle)["measurement"].values())
+    rows = markdown_rows(ROOT / "models" / "README.md", "| hall | L | latitude | measured |")
+    assert len(rows) == len(measurements)
+    for row, measured in zip(rows, measurements, strict=True):
+        assert measured["source"].split("/")[0] in row[-1], (row[0], measured["source"])
+        for figure in ("measured_deg_h", "low_deg_h", "high_deg_h"):
+            assert f"{measured[figure]:g}" in row[3], (row[0], figure)
+
+
 def test_the_number_of_models_in_the_docs_is_the_number_of_models() -> None:
     from foucault_bench.models import MODELS
 
