@@ -73,6 +73,8 @@ CASES = {
                                    ["cvode_bdf is adaptive", "no tol sweep"]),
     "reference integrator": ('scenes = ["seed_2min"]\nintegrators = ["heyoka_taylor_quad"]\ntol = [1e-6]',
                              ["heyoka_taylor_quad computes the references"]),
+    "unknown integrators form": ('scenes = ["seed_2min"]\nintegrators = "builtin"\nkh = [0.1]',
+                                 ["integrators: unknown form 'builtin'", "did you mean 'built-in'"]),
     "unreadable TOML": ('scenes = ["seed_2min"]\nintegrators = ["rk4"\nkh = [0.1]', ["not valid TOML", "line 3"]),
     "unimportable plug-in": ('plugins = ["no_such_module_here"]\nscenes = ["seed_2min"]\nintegrators = ["rk4"]\nkh = [0.1]',
                              ["plugins: cannot import 'no_such_module_here'"]),
@@ -166,6 +168,20 @@ def test_built_in_matrices_load_and_cover_every_built_in_family():
     assert halls <= {scene.name for scene in load_matrix("halls").scenes}
     tolerances = sorted({run.tol for run in default.runs if run.tol is not None})
     assert tolerances[0] <= 1e-13 and tolerances[-1] >= 1e-4
+
+
+def test_built_in_integrators_are_every_built_in_but_the_reference_as_if_listed(tmp_path):
+    """``integrators = "built-in"`` (the built-in matrices' form) is the registry's built-ins without the reference
+    integrator, and the same runs, run keys, order and matrix hash as the explicit list of those names, with
+    ``[override.NAME]`` tables applied to the expansion."""
+    text = 'scenes = ["seed_2min"]\nintegrators = "built-in"\nkh = [0.2]\ntol = [1e-6]\n[override.rk4]\nkh = [0.1]\n'
+    expanded = load_matrix(write(tmp_path, text, "built_in.toml"))
+    names = [name for name in built_in_names() if name != REFERENCE_INTEGRATOR]
+    listed = load_matrix(write(tmp_path, text.replace('"built-in"', repr(names).replace("'", '"')), "built_in.toml"))
+    assert list(dict.fromkeys(run.integrator for run in expanded.runs)) == names
+    assert [run.run_key for run in expanded.runs] == [run.run_key for run in listed.runs]
+    assert expanded.matrix_hash == listed.matrix_hash
+    assert {run.setting for run in expanded.runs if run.integrator == "rk4"} == {"kh=0.1"}
 
 
 # --- generated scene names ------------------------------------------------------------------------------------

@@ -75,7 +75,7 @@ def _parameter_keys() -> tuple[SceneKey, ...]:
 SCENE_KEY_TABLE: tuple[SceneKey, ...] = (
     SceneKey("base", "a built-in scene to start from: the table then gives only the keys it changes",
              default_note="none: the table gives every required key"),
-    SceneKey("model", f"model registry name ({', '.join(MODELS)})"),
+    SceneKey("model", "model registry name (models/README.md \"The models\"; an unknown name is refused with the list)"),
     *_parameter_keys(),
     SceneKey("duration_s", "integrated time span (s), a whole number of output intervals"),
     SceneKey("output_interval_s", "spacing (s) of the uniform output grid 0, Δ, 2Δ, …, duration shared by every "
