@@ -379,19 +379,19 @@ def test_signals_and_kills_leave_no_process_and_a_second_writer_is_refused(tmp_p
 def test_a_task_past_its_time_limit_has_its_process_killed():
     """What a Dask task does (``run_isolated``), here outside Dask: the worker process is killed at the limit
     and the next task gets a fresh one that checks its code version first."""
-    from foucault_bench.bench.run import dask_executor as executors
+    from foucault_bench.bench.run import dask_executor
     from foucault_bench.bench.run.matrix import code_version
 
     def on_failure(*task, status, reason):
         return status, reason
 
-    status, reason = executors.run_isolated(time.sleep, (60,), 1.0, on_failure, code_version(()), ())
+    status, reason = dask_executor.run_isolated(time.sleep, (60,), 1.0, on_failure, code_version(()), ())
     assert status == "timeout" and "time limit of 1 s" in reason
-    assert executors._THREAD.worker is None  # killed, not kept
-    assert executors.run_isolated(sum, ((1, 2),), 30.0, on_failure, code_version(()), ()) == 3
-    worker = executors._THREAD.worker
-    with pytest.raises(executors.CodeMismatch):
-        executors.run_isolated(sum, ((1, 2),), 30.0, on_failure, "another version", ())
+    assert dask_executor._THREAD.worker is None  # killed, not kept
+    assert dask_executor.run_isolated(sum, ((1, 2),), 30.0, on_failure, code_version(()), ()) == 3
+    worker = dask_executor._THREAD.worker
+    with pytest.raises(dask_executor.CodeMismatch):
+        dask_executor.run_isolated(sum, ((1, 2),), 30.0, on_failure, "another version", ())
     worker.close()
     assert not worker.alive()
 
