@@ -304,5 +304,24 @@ def test_the_scene_keys_in_bench_readme_are_the_reader_table() -> None:
     keys = [key.name for key in SCENE_KEY_TABLE]
     assert {field.name for field in fields(PendulumParameters)} <= set(keys) and len(set(keys)) == len(keys)
     unexplained = [key.name for key in SCENE_KEY_TABLE if len(key.meaning) < 10]
-    assert not unexplained, f"scene keys without a meaning (a PendulumParameters field missing from its " \
-                            f"docstring's Attributes?): {unexplained}"
+    assert not unexplained, f"scene keys without a meaning (a PendulumParameters field with neither a line in " \
+                            f"its docstring's Attributes nor rule(..., meaning=...)?): {unexplained}"
+
+
+def test_a_new_field_is_documented_by_its_rule_alone() -> None:
+    """A field added with ``rule(..., meaning=...)`` and no line in the class docstring gets that meaning in the
+    scene-key table (models/README.md "Adding a model": a new parameter is one line); the docstring's fields
+    keep theirs."""
+    from dataclasses import field, make_dataclass
+
+    from foucault_bench.bench.problems.scene_reader import parameter_keys
+    from foucault_bench.models import PendulumParameters
+    from foucault_bench.models.parameters import rule
+
+    meaning = "w, a steady horizontal force per unit mass along x (m/s²)"
+    extended = make_dataclass("Extended", [("wind_accel_m_s2", float, field(default=0.0, metadata=rule(
+        unit="m/s²", refinement=True, meaning=meaning)))], bases=(PendulumParameters,), frozen=True)
+    extended.__doc__ = PendulumParameters.__doc__
+    keys = {key.name: key.meaning for key in parameter_keys(extended)}
+    assert keys["wind_accel_m_s2"] == meaning
+    assert keys["length_m"].startswith("string length L (m)")
