@@ -32,7 +32,7 @@ PACKAGE_ROOT = Path(__file__).resolve().parents[1]
 install, ``site-packages/foucault_bench`` in a wheel install."""
 NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "integrators/methods/*.py", "bench/problems/*.py",
                   "bench/scenes/*.toml",
-                  "bench/verdicts/*.py", "bench/run/runner.py", "bench/run/timing.py")
+                  "bench/verdicts/*.py", "bench/run/execute.py", "bench/run/timing.py")
 """Source files (relative to ``PACKAGE_ROOT``) whose contents are part of every run key."""
 PROVENANCE_PACKAGES = ("numpy", "scipy", "numba", "heyoka", "scikit-sundae", "pandas", "distributed")
 """Libraries whose versions each matrix run records."""

@@ -15,15 +15,17 @@ How to add an integrator (integrators/README.md "Adding an integrator" has a wor
 4. Decorate the class with ``@register`` (``integrators.registry``).
 5. Run ``foucault-bench selftest NAME`` (``--plugin MODULE`` for a plug-in): it checks the declared order on
    every model, the declared stability limit, the counters, and that failures and divergences become rows.
-6. A built-in only: add it to both built-in matrices, ``bench/matrices/default.toml`` and
-   ``bench/matrices/quick.toml`` (``tests/test_matrix.py`` fails until every built-in family is swept by
-   them), and give it bounds (``[[bound]]`` entries with their basis) in ``bench/thresholds/default.toml``:
-   ``foucault-bench check`` judges the quick matrix that CI runs against those bounds, and an integrator
-   without one is judged by nothing (``check`` names it).
-7. A built-in only: the documents the tests hold to the registry: a row in integrators/README.md "The
-   integrators" with the declared family, order, stages and stability limit, and the default matrix's
-   counts in README.md ("The main job is … runs (N integrators × …"; ``tests/test_docs.py``); an adaptive
-   method's docstrings name its order, stability and tolerance mapping (``tests/test_adaptive.py``).
+6. A built-in only, required: its **registration line**, a row in integrators/README.md "The integrators"
+   with the declared family, order, stages and stability limit (``tests/test_docs.py`` holds the table to the
+   registry). An adaptive method's docstrings name its order, stability and tolerance mapping
+   (``tests/test_adaptive.py``); they are in the new file. Nothing else is required: both built-in matrices
+   sweep ``integrators = "built-in"``, every built-in but the reference (``bench.run.matrix_runs``), so it
+   joins the main job and CI's quick matrix by itself, with the shared kh or tol sweep.
+7. A built-in, recommended: bounds (``[[bound]]`` entries with their basis) in
+   ``bench/thresholds/default.toml``: ``foucault-bench check`` judges the quick matrix that CI runs against
+   them, and an integrator without one is judged by nothing (``check`` prints a note naming it; not a
+   failure). If the shared sweep does not suit it, its own under ``[override.NAME]`` in
+   ``bench/matrices/default.toml``.
 
 The framework then
 

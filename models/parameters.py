@@ -38,14 +38,17 @@ STANDARD_GRAVITY_M_S2 = 9.81
 
 
 def rule(check: Callable[[Any, "PendulumParameters"], bool] | None = None, requirement: str = "",
-         kind: str = "real", unit: str | None = None, refinement: bool = False) -> dict:
+         kind: str = "real", unit: str | None = None, refinement: bool = False, meaning: str = "") -> dict:
     """Field metadata: ``check(value, params)`` must hold, else ValueError "FIELD REQUIREMENT, got VALUE"
     (``requirement`` may name other fields as ``{p.length_m}``); ``None``: no rule beyond the kind. ``kind``:
     "real" (a finite real number), "pair" (two of them) or "bool". ``unit``: the field enters the parameter
     vector as itself, in that unit, with the index constant ``P_<FIELD NAME IN CAPITALS>``. ``refinement``: the
     field belongs to a refining model and its default changes nothing; a scene's key leaves it out while it has
-    its default (``bench.problems.scene_key``), so adding such a field keeps every existing scene's key."""
-    return {"check": check, "requirement": requirement, "kind": kind, "unit": unit, "refinement": refinement}
+    its default (``bench.problems.scene_key``), so adding such a field keeps every existing scene's key.
+    ``meaning``: what the field is, for a field without a line in the ``PendulumParameters`` docstring (a new
+    field is then one line; the scene-key table of bench/README.md reads either)."""
+    return {"check": check, "requirement": requirement, "kind": kind, "unit": unit, "refinement": refinement,
+            "meaning": meaning}
 
 
 def airy_fraction(swing_angle_rad: float) -> float:
@@ -79,6 +82,9 @@ class PendulumParameters:
         drive_gain_per_s: κ, gain of the drive near the centre, +κ ṙ / (1 + |r|²/r_d²) per unit mass (1/s;
             ``driven_linear``); 0: no drive.
         drive_radius_m: r_d, the radius (m) of the region round the centre where the drive acts.
+
+    A field added later may give its meaning in its rule instead (``rule(..., meaning="...")``), so that a new
+    parameter is one line (models/README.md "Adding a model").
     """
 
     length_m: float = field(metadata=rule(lambda v, p: v > 0, "must be > 0 (the string length in m)"))

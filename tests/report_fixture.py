@@ -1,7 +1,7 @@
 """A deterministic results database for the report's oracle tests, written through the real results store.
 
 ``build_fixture_database(path)`` writes one matrix run whose run specs come from ``parse_matrix`` (real run
-keys, scenes, declared integrator facts; ``bench.run.runner.base_row`` for each row's identity) and whose
+keys, scenes, declared integrator facts; ``bench.run.execute.base_row`` for each row's identity) and whose
 outcome columns are synthetic but plausible, so that no integrator runs and the file is written in well under a
 second:
 
@@ -172,7 +172,7 @@ def _unhappy(spec: "RunSpec", row: dict[str, object]) -> dict[str, object]:
 
 def fixture_rows(matrix_id: str) -> list[dict[str, object]]:
     """Every row of the fixture's matrix run ``matrix_id``, in matrix order."""
-    from foucault_bench.bench.run.runner import base_row
+    from foucault_bench.bench.run.execute import base_row
 
     return [_unhappy(spec, {**base_row(spec, matrix_id), **_outcome(spec)}) for spec in fixture_matrix().runs]
 

@@ -21,11 +21,11 @@ from pathlib import Path
 
 import pytest
 
-import foucault_bench.bench.run.executors as executors_module
+import foucault_bench.bench.run.dask_executor as executors_module
 
 from foucault_bench.bench.cli import main as cli_main
 from foucault_bench.bench.run.matrix import load_matrix
-from foucault_bench.bench.run.runner import run_matrix
+from foucault_bench.bench.run.runner import make_executor, run_matrix
 from foucault_bench.bench.run.compare import compare_runs
 from foucault_bench.bench.run.store import ResultsStore
 
@@ -271,7 +271,7 @@ def test_losing_every_worker_interrupts(tmp_path, monkeypatch):
 
     killer = threading.Thread(target=kill_the_workers, daemon=True)
     try:
-        executor = executors_module.make_executor(1, address)
+        executor = make_executor(1, address)
         with ResultsStore(database) as store:
             killer.start()
             with pytest.raises(RunInterrupted, match="every usable Dask worker"):

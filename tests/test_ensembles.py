@@ -276,7 +276,7 @@ def test_run_members_equals_one_by_one_runs() -> None:
     """The batch seam: the rows of one configuration's members through ``run_members`` equal, accuracy column
     by column and bit for bit, the rows of the same runs one by one."""
     from foucault_bench.bench.run.ensemble_jobs import configurations, run_members
-    from foucault_bench.bench.run.runner import execute_run
+    from foucault_bench.bench.run.execute import execute_run
 
     matrix = parse_matrix({**TINY, "integrators": ["verlet"], "kh": [0.2]}, source="tiny")
     (specs,) = configurations(matrix.runs[:2]).values()

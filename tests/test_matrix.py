@@ -73,6 +73,8 @@ CASES = {
                                    ["cvode_bdf is adaptive", "no tol sweep"]),
     "reference integrator": ('scenes = ["seed_2min"]\nintegrators = ["heyoka_taylor_quad"]\ntol = [1e-6]',
                              ["heyoka_taylor_quad computes the references"]),
+    "unknown integrators form": ('scenes = ["seed_2min"]\nintegrators = "builtin"\nkh = [0.1]',
+                                 ["integrators: unknown form 'builtin'", "did you mean 'built-in'"]),
     "unreadable TOML": ('scenes = ["seed_2min"]\nintegrators = ["rk4"\nkh = [0.1]', ["not valid TOML", "line 3"]),
     "unimportable plug-in": ('plugins = ["no_such_module_here"]\nscenes = ["seed_2min"]\nintegrators = ["rk4"]\nkh = [0.1]',
                              ["plugins: cannot import 'no_such_module_here'"]),
@@ -159,13 +161,30 @@ def test_built_in_matrices_load_and_cover_every_built_in_family():
     default = load_matrix("default")
     from foucault_bench.bench.problems.scenes import SCENE_DIRECTORY, load_scene_files
 
-    # the default matrix sweeps the scenes of builtin.toml; the real halls (real_halls.toml) have their own matrix
+    # the default matrix sweeps exactly the scenes of builtin.toml; every other built-in scene (real_halls.toml,
+    # a new scenes file) is swept by some built-in matrix (bench/README.md "Scenes")
     builtin = load_scene_files([SCENE_DIRECTORY / "builtin.toml"])
-    halls = set(SCENES) - set(builtin)
     assert {scene.name for scene in default.scenes} == set(builtin)
-    assert halls <= {scene.name for scene in load_matrix("halls").scenes}
+    swept = {scene.name for name in built_in_matrices() for scene in load_matrix(name).scenes}
+    unswept = sorted(set(SCENES) - swept)
+    assert not unswept, f"built-in scenes no built-in matrix sweeps: {unswept} (list each under scenes = [...] " \
+                        "in the built-in matrix that should run it)"
     tolerances = sorted({run.tol for run in default.runs if run.tol is not None})
     assert tolerances[0] <= 1e-13 and tolerances[-1] >= 1e-4
+
+
+def test_built_in_integrators_are_every_built_in_but_the_reference_as_if_listed(tmp_path):
+    """``integrators = "built-in"`` (the built-in matrices' form) is the registry's built-ins without the reference
+    integrator, and the same runs, run keys, order and matrix hash as the explicit list of those names, with
+    ``[override.NAME]`` tables applied to the expansion."""
+    text = 'scenes = ["seed_2min"]\nintegrators = "built-in"\nkh = [0.2]\ntol = [1e-6]\n[override.rk4]\nkh = [0.1]\n'
+    expanded = load_matrix(write(tmp_path, text, "built_in.toml"))
+    names = [name for name in built_in_names() if name != REFERENCE_INTEGRATOR]
+    listed = load_matrix(write(tmp_path, text.replace('"built-in"', repr(names).replace("'", '"')), "built_in.toml"))
+    assert list(dict.fromkeys(run.integrator for run in expanded.runs)) == names
+    assert [run.run_key for run in expanded.runs] == [run.run_key for run in listed.runs]
+    assert expanded.matrix_hash == listed.matrix_hash
+    assert {run.setting for run in expanded.runs if run.integrator == "rk4"} == {"kh=0.1"}
 
 
 # --- generated scene names ------------------------------------------------------------------------------------

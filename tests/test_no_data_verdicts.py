@@ -11,7 +11,7 @@ import pytest
 
 from foucault_bench.bench.problems.scenes import SCENES
 from foucault_bench.bench.run.matrix import RunSpec
-from foucault_bench.bench.run.runner import execute_run
+from foucault_bench.bench.run.execute import execute_run
 from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.run.timing import TimingPolicy
 from foucault_bench.bench.schema import VERDICT_COLUMNS

@@ -42,7 +42,7 @@ one target is met by a symplectic method 40/5 = 8 times dearer than the leader a
 @pytest.fixture(scope="module")
 def database(tmp_path_factory):
     from foucault_bench.bench.run.matrix import parse_matrix
-    from foucault_bench.bench.run.runner import base_row
+    from foucault_bench.bench.run.execute import base_row
     from foucault_bench.bench.run.store import ResultsStore
 
     matrix = parse_matrix(MATRIX, source="tiny_nonconservative", default_name="tiny_nonconservative")

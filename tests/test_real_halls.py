@@ -252,7 +252,7 @@ def halls_database(tmp_path_factory):
     synthetic outcome columns: the rate measured on the scene's closed form plus ``SYNTHETIC_RATE_ERROR``, one
     diverged run whose error is the smallest (the table must skip it)."""
     from foucault_bench.bench.run.matrix import parse_matrix
-    from foucault_bench.bench.run.runner import base_row
+    from foucault_bench.bench.run.execute import base_row
     from foucault_bench.bench.run.store import ResultsStore
 
     matrix = parse_matrix(HALLS_MATRIX, source="tiny_halls", default_name="tiny_halls")

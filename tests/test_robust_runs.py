@@ -27,7 +27,8 @@ from foucault_bench.bench.cli import main as cli_main
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.validation import MAX_STEPS
 from foucault_bench.bench.run.matrix import MAX_RUNS, load_matrix, parse_matrix
-from foucault_bench.bench.run.runner import WORKER_DIED, run_matrix
+from foucault_bench.bench.run.executors import WORKER_DIED
+from foucault_bench.bench.run.runner import run_matrix
 from foucault_bench.bench.run.compare import compare_runs
 from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.integrators import unregister
@@ -378,19 +379,19 @@ def test_signals_and_kills_leave_no_process_and_a_second_writer_is_refused(tmp_p
 def test_a_task_past_its_time_limit_has_its_process_killed():
     """What a Dask task does (``run_isolated``), here outside Dask: the worker process is killed at the limit
     and the next task gets a fresh one that checks its code version first."""
-    from foucault_bench.bench.run import executors
+    from foucault_bench.bench.run import dask_executor
     from foucault_bench.bench.run.matrix import code_version
 
     def on_failure(*task, status, reason):
         return status, reason
 
-    status, reason = executors.run_isolated(time.sleep, (60,), 1.0, on_failure, code_version(()), ())
+    status, reason = dask_executor.run_isolated(time.sleep, (60,), 1.0, on_failure, code_version(()), ())
     assert status == "timeout" and "time limit of 1 s" in reason
-    assert executors._THREAD.worker is None  # killed, not kept
-    assert executors.run_isolated(sum, ((1, 2),), 30.0, on_failure, code_version(()), ()) == 3
-    worker = executors._THREAD.worker
-    with pytest.raises(executors.CodeMismatch):
-        executors.run_isolated(sum, ((1, 2),), 30.0, on_failure, "another version", ())
+    assert dask_executor._THREAD.worker is None  # killed, not kept
+    assert dask_executor.run_isolated(sum, ((1, 2),), 30.0, on_failure, code_version(()), ()) == 3
+    worker = dask_executor._THREAD.worker
+    with pytest.raises(dask_executor.CodeMismatch):
+        dask_executor.run_isolated(sum, ((1, 2),), 30.0, on_failure, "another version", ())
     worker.close()
     assert not worker.alive()
 
@@ -492,7 +493,7 @@ def test_more_jobs_than_cores_are_capped_with_a_note(capsys):
 def test_a_run_time_limit_counts_from_the_start_of_the_run_not_of_its_worker(tmp_path, monkeypatch):
     """A worker's start-up (here: a task module that takes 2 s to import, as heavy imports do on a loaded machine)
     is not the run's time: a 1 s limit stops a run that takes 60 s, not an instant one behind a slow start."""
-    from foucault_bench.bench.run.executors import LocalExecutor
+    from foucault_bench.bench.run.local_executor import LocalExecutor
 
     module_name = f"slow_to_import_{os.getpid()}"
     write(tmp_path / f"{module_name}.py", """

@@ -19,7 +19,8 @@ import pytest
 from foucault_bench.bench.cli import main as cli_main
 from foucault_bench.bench.run.matrix import load_matrix
 from foucault_bench.bench.provenance import code_version
-from foucault_bench.bench.run.runner import WORKER_DIED, run_matrix
+from foucault_bench.bench.run.executors import WORKER_DIED
+from foucault_bench.bench.run.runner import run_matrix
 from foucault_bench.bench.schema import COLUMN_NAMES
 from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.integrators import unregister

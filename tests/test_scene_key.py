@@ -12,7 +12,7 @@ import pandas as pd
 from foucault_bench.bench.problems.scene_key import SCENE_KEY_HEX_DIGITS, scene_key, scene_labels
 from foucault_bench.bench.problems.scenes import SCENES, scene_from_mapping
 from foucault_bench.bench.run.matrix import parse_matrix
-from foucault_bench.bench.run.runner import base_row
+from foucault_bench.bench.run.execute import base_row
 from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.run.summary import summarize
 from foucault_bench.bench.schema import COLUMNS

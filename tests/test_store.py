@@ -168,7 +168,7 @@ def test_results_command_without_a_database_exits_2(tmp_path, capsys):
 
 
 def test_rows_carry_the_declared_integrator_facts():
-    from foucault_bench.bench.run.runner import base_row
+    from foucault_bench.bench.run.execute import base_row
     from foucault_bench.integrators import REGISTRY
 
     for spec in MATRIX.runs:

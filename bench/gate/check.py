@@ -25,7 +25,8 @@ def run_for_check(thresholds: Thresholds, matrix_name: str, *, db: str | None, j
     """Validate ``thresholds`` against the planned runs of the matrix (before anything runs), run the matrix
     into ``db`` (a temporary database when ``None``) with the per-run time limit ``run_timeout_s`` (the
     matrix's when ``None``) and return its rows and a description of them."""
-    from foucault_bench.bench.run.runner import LocalExecutor, run_matrix
+    from foucault_bench.bench.run.local_executor import LocalExecutor
+    from foucault_bench.bench.run.runner import run_matrix
 
     executor = LocalExecutor(jobs)  # first: the workers start while the matrix and thresholds are validated
     try:

@@ -163,7 +163,7 @@ def planned_rows(matrix: "Matrix") -> pd.DataFrame:
     """The identity columns of the rows ``matrix`` will produce, as the runner fills them (``base_row``), with
     each fixed-step run's effective step (``uniform_output_stride`` on the scene's grid), its family and
     ``n_out``: enough to validate a thresholds file before anything runs."""
-    from foucault_bench.bench.run.runner import base_row
+    from foucault_bench.bench.run.execute import base_row
     from foucault_bench.integrators.fixed_step import uniform_output_stride
 
     rows = []

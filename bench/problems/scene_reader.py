@@ -62,21 +62,22 @@ def _attribute_texts(cls: type) -> dict[str, str]:
     return texts
 
 
-def _parameter_keys() -> tuple[SceneKey, ...]:
-    """One key per ``PendulumParameters`` field, in field order: its docstring's meaning, its default."""
-    meanings = _attribute_texts(PendulumParameters)
+def parameter_keys(parameters_class: type = PendulumParameters) -> tuple[SceneKey, ...]:
+    """One key per ``PendulumParameters`` field, in field order: its meaning (the rule's ``meaning``, else the
+    class docstring's line), its default."""
+    meanings = _attribute_texts(parameters_class)
     return tuple(
-        SceneKey(field.name, meanings.get(field.name, ""),
+        SceneKey(field.name, field.metadata.get("meaning") or meanings.get(field.name, ""),
                  None if field.default is dataclasses.MISSING else field.default)
-        for field in dataclasses.fields(PendulumParameters)
+        for field in dataclasses.fields(parameters_class)
     )
 
 
 SCENE_KEY_TABLE: tuple[SceneKey, ...] = (
     SceneKey("base", "a built-in scene to start from: the table then gives only the keys it changes",
              default_note="none: the table gives every required key"),
-    SceneKey("model", f"model registry name ({', '.join(MODELS)})"),
-    *_parameter_keys(),
+    SceneKey("model", "model registry name (models/README.md \"The models\"; an unknown name is refused with the list)"),
+    *parameter_keys(),
     SceneKey("duration_s", "integrated time span (s), a whole number of output intervals"),
     SceneKey("output_interval_s", "spacing (s) of the uniform output grid 0, Δ, 2Δ, …, duration shared by every "
              "integrator of the scene and its reference; at most 1/5 of the small-swing period",

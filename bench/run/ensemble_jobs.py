@@ -2,7 +2,7 @@
 
 An ensemble's members (``bench.problems.ensemble``) that share an integrator and a setting are one configuration
 (``configurations``: keyed by ensemble, integrator and the setting asked for). ``run_members`` runs them and
-returns their rows in order; today it runs each member by itself through the runner (``bench.run.runner.
+returns their rows in order; today it runs each member by itself through the runner (``bench.run.execute.
 execute_run``: its own reference, timing and verdicts), so that its rows are exactly the rows of one-by-one
 runs. A batch implementation (heyoka's batch mode for the references and Taylor runs, one compiled loop over
 the members for the fixed-step methods) replaces its body and keeps its contract: one row per member, in the
@@ -32,7 +32,7 @@ def configurations(specs: Iterable[RunSpec]) -> dict[ConfigurationKey, list[RunS
 
 def run_members(specs: list[RunSpec], matrix_id: str) -> list[dict[str, Any]]:
     """The rows of one configuration's members (``configurations``), in order (module docstring)."""
-    from foucault_bench.bench.run.runner import execute_run
+    from foucault_bench.bench.run.execute import execute_run
 
     keys = {(spec.scene.ensemble, spec.integrator, spec.setting) for spec in specs}
     if len(keys) > 1:

@@ -5,7 +5,7 @@ A matrix file (read with ``tomllib``) looks like this (bench/README.md "Benchmar
     name = "example"
     description = "what this matrix is for"
     scenes = ["pantheon"]                 # built-in scenes (bench.problems.scenes.SCENES)
-    integrators = ["rk4", "verlet", "cvode_bdf"]
+    integrators = ["rk4", "verlet", "cvode_bdf"]  # or "built-in": every built-in integrator but the reference
     kh = [0.5, 0.25, 0.125]               # fixed-step sweep: step h in units of 1/k = √(L/g)
     tol = [1e-6, 1e-9]                    # adaptive sweep: tolerance handed to the integrator as ``tol``
     plugins = ["my_package.my_integrator"]  # modules imported first (they register integrators)

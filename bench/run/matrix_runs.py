@@ -3,7 +3,7 @@
 ``bench.run.matrix`` reads the file; this module turns its validated scenes, integrators and sweeps into the
 runs (scenes × settings, per integrator), refusing settings whose work is absurd (``MAX_STEPS`` fixed steps in a
 run, a step longer than an output interval, more than ``MAX_RUNS`` runs, counted from the lists' lengths before
-their entries are checked). ``string_list`` reads a list of names, for every part of the matrix reader.
+their entries are checked). ``integrators`` is a list of names or ``"built-in"`` (``integrator_names``). ``string_list`` reads a list of names, for every part of the matrix reader.
 """
 
 from __future__ import annotations
@@ -24,6 +24,9 @@ from foucault_bench.bench.validation import (
 )
 
 SETTING_KEYS = ("kh", "tol")
+BUILT_IN = "built-in"
+"""``integrators = "built-in"``: every built-in integrator but the reference (``integrator_names``), so that a
+new built-in joins the matrices that say so without an edit."""
 MAX_OUTPUT_POINTS = 10**7
 """More output points per scene than this is refused (each solution holds 4 doubles per point: 320 MB)."""
 MAX_RUNS = 100_000
@@ -109,9 +112,7 @@ def runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timi
           problem, known_later: bool = False) -> list[RunSpec]:
     from foucault_bench.integrators import REGISTRY  # imported here: plugins must be imported first
 
-    names = string_list(document, "integrators", problem, required=True)
-    if "integrators" in document and isinstance(document["integrators"], list) and not document["integrators"]:
-        problem("integrators: the list is empty; name at least one integrator")
+    names = integrator_names(document, problem)
     integrators = []
     for name in names:
         if name == REFERENCE_INTEGRATOR:
@@ -195,6 +196,24 @@ def runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timi
             problem(f"{key} is given but no listed {kind} integrator uses it "
                     f"({'tolerances are for adaptive integrators' if key == 'tol' else 'kh is for fixed-step integrators'})")
     return runs
+
+
+def integrator_names(document: dict[str, Any], problem) -> list[str]:
+    """The matrix's ``integrators``: a list of registry names, or ``BUILT_IN``, every built-in integrator
+    (``integrators.built_in_names``, in its order) but the reference integrator, which is never swept."""
+    from foucault_bench.integrators import built_in_names  # imported here, like the registry above
+
+    value = document.get("integrators")
+    if isinstance(value, str):
+        if value == BUILT_IN:
+            return [name for name in built_in_names() if name != REFERENCE_INTEGRATOR]
+        problem(f"integrators: unknown form {short_repr(value)}{suggestion(value, [BUILT_IN])}; give a list of "
+                f"integrator names or {BUILT_IN!r} (every built-in integrator)")
+        return []
+    names = string_list(document, "integrators", problem, required=True)
+    if isinstance(value, list) and not value:
+        problem("integrators: the list is empty; name at least one integrator")
+    return names
 
 
 def _setting_keys(integrator: Any) -> tuple[str, str]:

@@ -122,7 +122,7 @@ class WorkerProcess:
         self.last_used = time.monotonic()
         self.started_at: float | None = None
         """When the task sent last began (its start notice), ``None`` until then."""
-        self.code_version: str | None = None  # set by whoever checks it (bench.run.executors.run_isolated)
+        self.code_version: str | None = None  # set by whoever checks it (bench.run.dask_executor.run_isolated)
         self._send(list(sys.path))  # the worker imports the same modules (what multiprocessing's spawn does)
 
     @property
