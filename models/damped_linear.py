@@ -55,5 +55,7 @@ MODEL = Model(
     hamiltonian=False,
     refines=("linear",),
     example_parameters={"drag_linear_per_s": 2.0e-3, "drag_quadratic_per_m": 1.0e-3},
+
+    order_sweep_ellipse=0.8,
     adds_parameters=("drag_linear_per_s", "drag_quadratic_per_m"),
 )

@@ -47,5 +47,7 @@ MODEL = Model(
     hamiltonian=False,
     refines=("damped_linear",),
     example_parameters={"drive_gain_per_s": 3.0e-3, "drive_radius_m": 0.05},
+
+    order_sweep_ellipse=0.8,
     adds_parameters=("drive_gain_per_s",),
 )

@@ -44,6 +44,7 @@ and whether it held.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass
@@ -66,7 +67,19 @@ START_KH = 0.5
 MAX_ERROR = 0.1
 """Errors (of the final position, in units of the amplitude) above this are not asymptotic yet."""
 FLOOR_ERROR = 1e-10
-"""Below this, accumulated round-off (~1e-16 per step) starts to show: the sweep stops."""
+"""Below this, accumulated round-off (~1e-16 per step) starts to show: the sweep stops (orders up to
+``HALVING_MAX_ORDER``)."""
+HALVING_MAX_ORDER = 6
+HIGH_ORDER_FLOOR_ERROR = 1e-13
+"""The floor of the sweep above order ``HALVING_MAX_ORDER``: their runs take tens to hundreds of steps, and the
+references are good to ~1e-15. A run's own round-off can lie higher (RATTLE on the sphere: 1-2e-13 after a
+thousand sub-steps of the order-8 composition), so a point whose error is below ``ROUND_OFF_PER_EVALUATION``
+times its counted evaluations (ε per evaluation, growing linearly: the pessimistic bound) ends the sweep too and
+is not fitted."""
+ROUND_OFF_PER_EVALUATION = 2.220446049250313e-16
+UNDECLARED_LIMIT_START_KH = 1.0
+"""The coarsest first step of a high-order sweep for a method that declares no stability limit (the main methods
+of the embedded pairs): 6 steps per period, inside the imaginary-axis stability interval of every built-in pair."""
 SPAN_DECADES = 2.0
 MIN_POINTS = 5
 MAX_RUN_STEPS = 4_000_000
@@ -158,9 +171,35 @@ class OrderMeasurement:
     note: str = ""
 
 
+@dataclass(frozen=True)
+class Sweep:
+    """How the order sweep steps: kh is divided by ``ratio`` from one run to the next until ``points_needed``
+    errors lie below ``MAX_ERROR`` or, with ``to_floor``, until the round-off floor ``floor`` (final-position
+    error, units of the amplitude), whichever ends the sweep later; the first kh is doubled (up to ½ the
+    stability limit) while the first error lies within ``room`` steps of that floor."""
+
+    ratio: float
+    floor: float
+    room: int
+    to_floor: bool
+
+
+HALVING = Sweep(ratio=2.0, floor=FLOOR_ERROR, room=1, to_floor=False)
+
+
+def sweep_for(order: int) -> Sweep:
+    """``HALVING`` up to order ``HALVING_MAX_ORDER``; above, steps of 10^(1/p) (about one decade of error per
+    point, 5-6 points between a first error near 1e-7 and the floor) down to ``HIGH_ORDER_FLOOR_ERROR``, and
+    the error stops being measured where it no longer falls (module docstring, check 1)."""
+    if order <= HALVING_MAX_ORDER:
+        return HALVING
+    return Sweep(ratio=10.0 ** (1.0 / order), floor=HIGH_ORDER_FLOOR_ERROR, room=MIN_POINTS - 1, to_floor=True)
+
+
 def points_needed(order: int) -> int:
-    """Sweep points below ``MAX_ERROR``: enough halvings to span ``SPAN_DECADES`` decades at order p."""
-    return max(MIN_POINTS, math.ceil(SPAN_DECADES / (order * math.log10(2.0))) + 1)
+    """Sweep points below ``MAX_ERROR``: enough steps of the sweep's ratio to span ``SPAN_DECADES`` decades at
+    order p."""
+    return max(MIN_POINTS, math.ceil(SPAN_DECADES / (order * math.log10(sweep_for(order).ratio))) + 1)
 
 
 def reference_final_state(model: Model, params: PendulumParameters, duration_s: float) -> np.ndarray:
@@ -176,8 +215,15 @@ def reference_final_state(model: Model, params: PendulumParameters, duration_s: 
 
 def order_parameters(model: Model) -> PendulumParameters:
     """The parameters of the order sweep on ``model``: ``ORDER_PARAMS`` with the model's declared
-    ``example_parameters`` applied, so that what the model adds to its parents acts in the sweep."""
-    return model.with_example_parameters(ORDER_PARAMS)
+    ``example_parameters`` applied, so that what the model adds to its parents acts in the sweep, released on the
+    ellipse the model declares (``Model.order_sweep_ellipse``: a sideways speed b/a · kA, at right angles to the
+    release direction; from rest by default)."""
+    params = model.with_example_parameters(ORDER_PARAMS)
+    if not model.order_sweep_ellipse:
+        return params
+    speed = model.order_sweep_ellipse * params.pendulum_frequency_rad_s * params.amplitude_m
+    sideways = math.radians(params.release_azimuth_deg + 90.0)
+    return dataclasses.replace(params, release_velocity_m_s=(speed * math.cos(sideways), speed * math.sin(sideways)))
 
 
 def measure_order(integrator: Integrator, model: Model, params: PendulumParameters | None = None,
@@ -190,13 +236,15 @@ def measure_order(integrator: Integrator, model: Model, params: PendulumParamete
     reference = reference_final_state(model, params, duration)
     problem = Problem(model, params, np.array([0.0, duration]))
     limit = integrator.stability_limit_kh
-    kh = min(START_KH, 0.5 * limit) if limit else START_KH
     order = cast(int, integrator.order)  # check_order runs for a declared order only
+    sweep = sweep_for(order)
+    kh = min(START_KH, 0.5 * limit) if limit else START_KH
+    coarsest = 0.5 * limit if limit else (UNDECLARED_LIMIT_START_KH if sweep.to_floor else kh)
     wanted = points_needed(order)
     steps: list[float] = []
     errors: list[float] = []
     note = ""
-    while sum(error <= MAX_ERROR for error in errors) < wanted:
+    while sweep.to_floor or sum(error <= MAX_ERROR for error in errors) < wanted:
         n_steps = math.ceil(k * duration / kh)
         if n_steps > MAX_RUN_STEPS:
             note = f"stopped at {MAX_RUN_STEPS} steps per run"
@@ -207,14 +255,19 @@ def measure_order(integrator: Integrator, model: Model, params: PendulumParamete
             error = float(np.hypot(*(solution.y[-1, :2] - reference[:2])) / params.amplitude_m)
         steps.append(duration / n_steps)
         errors.append(error)
-        if len(errors) == 1 and error < FLOOR_ERROR * 2.0 ** order and limit and 2 * kh <= 0.5 * limit:
-            steps.clear()  # a high order: the next halving would reach the floor, so start coarser
+        if len(errors) == 1 and error < sweep.floor * sweep.ratio ** (order * sweep.room) and 2 * kh <= coarsest:
+            steps.clear()  # a high order: the next points would reach the floor, so start coarser
             errors.clear()
             kh *= 2.0
             continue
-        if error < FLOOR_ERROR:
+        stalled = sweep.to_floor and len(errors) > 1 and error >= errors[-2]
+        below_round_off = sweep.to_floor and error < ROUND_OFF_PER_EVALUATION * (solution.nfev or 0)
+        if error < sweep.floor or stalled or below_round_off:
+            if sweep.to_floor:  # within ~100 × round-off, or round-off already: it would tilt the fit by its noise
+                steps.pop()
+                errors.pop()
             break
-        kh *= 0.5
+        kh /= sweep.ratio
     h, e = np.array(steps), np.array(errors)
     return OrderMeasurement(h, e, observed_order(steps, errors), note)
 
@@ -224,15 +277,21 @@ def measure_order(integrator: Integrator, model: Model, params: PendulumParamete
 
 def check_order(integrator: Integrator, model: Model) -> Check:
     name = f"order on {model.name}"
-    if integrator.adaptive or integrator.order is None:
-        why = "adaptive: error against tolerance is no order" if integrator.adaptive else "no order declared"
+    stepped = integrator.fixed_step_method() if integrator.adaptive else integrator
+    if stepped is None or integrator.order is None:
+        unmeasurable = getattr(integrator, "main_method_unmeasurable", "")
+        why = ("no order declared" if integrator.order is None
+               else f"adaptive, main method not measurable here: {unmeasurable}" if unmeasurable
+               else "adaptive, with no fixed-step formula: error against tolerance is no order")
         return Check(name, None, why)
     params = order_parameters(model)
-    measured = measure_order(integrator, model, params)
+    measured = measure_order(stepped, model, params)
     holds = bool(abs(measured.order - integrator.order) <= ORDER_TOLERANCE)
     points = ", ".join(f"{error:.1e}" for error in measured.errors[np.isfinite(measured.errors)][-4:])
     example = "".join(f", {key} = {value!r}" for key, value in model.example_parameters.items())
-    detail = (f"observed order {measured.order:.2f} of the final-position error, declared {integrator.order}, "
+    detail = (f"observed order {measured.order:.2f} of the final-position error"
+              + (f" of its main method at fixed steps ({stepped.name})" if stepped is not integrator else "")
+              + f", declared {integrator.order}, "
               f"allowed ±{ORDER_TOLERANCE}: {'held' if holds else 'NOT held'}; "
               f"{measured.errors.size} steps down to kh = {measured.step_sizes_s[-1] * params.pendulum_frequency_rad_s:.2g}"
               f"{example}, finest errors {points}" + (f"; {measured.note}" if measured.note else ""))
