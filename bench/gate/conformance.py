@@ -4,21 +4,32 @@ An integrator declares facts (``integrators.base.Integrator``: order, stages, ad
 module measures them, on small problems that take seconds, so that a plug-in author learns in one command
 whether the suite will treat the method correctly. Every check returns a ``Check`` (a row), never raises:
 
-1. **order on MODEL**, for every model and every fixed-step integrator with a declared order p: the observed
-   order of the final-position error over a step sweep (``measure_order``) lies within ``ORDER_TOLERANCE`` of
-   p. The sweep runs at the model's declared ``example_parameters`` (``order_parameters``), so a model that adds
-   a parameter is checked where that parameter acts, not only where it equals its parent model. The sweep is derived from the declared facts: it starts at kh = min(½ stability limit, ``START_KH``),
-   halves kh until the error falls below ``MAX_ERROR`` and then keeps ``points_needed(p)`` more points (enough
-   halvings to span ``SPAN_DECADES`` decades of error at order p), stopping early at the round-off floor
-   ``FLOOR_ERROR`` (a method of high order whose first point lies within one halving of that floor starts
-   again at twice the step, up to ½ its stability limit: the order-10 composition is at 1.5e-12 at kh = 0.47);
-   ``bench.verdicts.convergence.observed_order`` fits the slope on the finest points (the
+1. **order on MODEL**, for every model and every integrator with a declared order p that steps at fixed steps,
+   or is an adaptive pair whose main method can (``Integrator.fixed_step_method``: the embedded Runge-Kutta pairs'
+   c, A and b at fixed steps, ``integrators.embedded_rk``; ``tsit5`` and ``vern9`` say why theirs cannot be
+   measured in double precision, ``main_method_unmeasurable``): the observed order of the final-position error
+   over a step sweep (``measure_order``) lies within ``ORDER_TOLERANCE`` of p. The sweep runs at the model's
+   declared ``example_parameters`` (``order_parameters``), so a model that adds a parameter is checked where that
+   parameter acts, not only where it equals its parent model, released on the ellipse the model declares
+   (``Model.order_sweep_ellipse``: the drag and drive models, whose forces have complex singularities close to
+   the real axis on a planar swing). The sweep is derived from the declared facts (``sweep_for``): it starts at
+   kh = min(½ stability limit, ``START_KH``). Up to order ``HALVING_MAX_ORDER`` it halves kh until the error falls
+   below ``MAX_ERROR`` and then keeps ``points_needed(p)`` more points (enough to span ``SPAN_DECADES`` decades of
+   error at order p), stopping early at the round-off floor ``FLOOR_ERROR`` (a first point within one halving of
+   that floor starts again at twice the step, up to ½ the stability limit). Above that order one halving lowers
+   the error by 2.4-3 decades, the whole usable range holds three or four halvings, and the terms after the
+   leading one still tilt their slope (the order-10 composition was observed at 9.53 on seed_planar with
+   halvings): the sweep divides kh by 10^(1/p) (a decade of error per point) from a start at up to ½ the
+   stability limit (``UNDECLARED_LIMIT_START_KH`` when none is declared) where the first error is within
+   ``MIN_POINTS`` − 1 steps of the floor, down to ``HIGH_ORDER_FLOOR_ERROR`` or the run's own round-off
+   (``ROUND_OFF_PER_EVALUATION`` × its evaluations), or until the error stops falling; that last point is not
+   fitted. ``bench.verdicts.convergence.observed_order`` fits the slope on the finest points (the
    same rule the report and the gate use). The sweep runs with Earth's rotation sped up to
    ``ROTATION_OVER_SWING`` × k: at the real rate (Ω_E/k ≈ 1e-5) an error term proportional to Ω h, such as an
    explicit Coriolis kick in a Verlet scheme, stays below the (kh)² term at every measurable step and a wrong
    order would go unseen. References: the closed form for the linear model (``models.analytic``), heyoka's
    Taylor method at ``REFERENCE_TOL`` for the others (errors ~1e-15 of the amplitude, far below ``FLOOR_ERROR``).
-   Adaptive integrators are skipped: error against tolerance is no order.
+   Adaptive integrators without a fixed-step formula are skipped: error against tolerance is no order.
 2. **stable below the limit** and **diverges above the limit**, for every declared ``stability_limit_kh``:
    on the undamped oscillator ẍ = −k²x (the linear model with no rotation, where the limit is defined;
    Hairer, Nørsett & Wanner, Solving ODEs I, §IV.2) the energy error reached after ``STABILITY_STEPS`` steps
