@@ -175,7 +175,8 @@ def _times(a: dict[Word, float], b: dict[Word, float], max_weight: int) -> dict[
 
 def _exp(x: dict[Word, float], max_weight: int) -> dict[Word, float]:
     """exp(x) = Σ xⁿ/n! for a series without a constant term (xⁿ has weight ≥ n)."""
-    result, term = {(): 1.0}, {(): 1.0}
+    result: dict[Word, float] = {(): 1.0}
+    term: dict[Word, float] = {(): 1.0}
     for n in range(1, max_weight + 1):
         term = {word: c / n for word, c in _times(term, x, max_weight).items()}
         result = {word: result.get(word, 0.0) + term.get(word, 0.0) for word in result.keys() | term.keys()}
