@@ -166,9 +166,11 @@ def _words(max_weight: int, letters: tuple[int, ...] = ()) -> list[Word]:
 
 def _times(a: dict[Word, float], b: dict[Word, float], max_weight: int) -> dict[Word, float]:
     product: dict[Word, float] = {}
+    right = [(word, coefficient, sum(word)) for word, coefficient in b.items()]
     for word_a, coefficient_a in a.items():
-        for word_b, coefficient_b in b.items():
-            if sum(word_a) + sum(word_b) <= max_weight:
+        room = max_weight - sum(word_a)
+        for word_b, coefficient_b, weight_b in right:
+            if weight_b <= room:
                 product[word_a + word_b] = product.get(word_a + word_b, 0.0) + coefficient_a * coefficient_b
     return product
 
