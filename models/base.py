@@ -134,7 +134,7 @@ class Model:
             none of them (``bench.verdicts.adequacy``). ``()`` (the default): the model differs from its parents
             at every parameter value. Each must appear in ``example_parameters``.
         order_sweep_ellipse: the minor-to-major axis ratio b/a of the swing the order check of ``foucault-bench
-            selftest`` releases (``bench.gate.conformance.order_parameters``): a sideways release speed of
+            selftest`` releases (``bench.gate.order_sweep.order_parameters``): a sideways release speed of
             b/a · kA. 0 (the default) releases from rest, a planar swing whose speed passes through 0 at every
             turning point and whose position passes through the centre. A model whose force varies on a scale
             far below the swing's there (a smoothed |ṙ|ṙ, a drive concentrated near the centre) has complex

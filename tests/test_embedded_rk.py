@@ -245,8 +245,7 @@ def test_vern9s_main_method_approaches_order_9_from_above_down_to_round_off() ->
     still above 9.1 where the error reaches 3e-14: order 9, as declared (never below 8.9, so not 8), yet no fit
     above round-off comes within 0.15 of it. The pairs whose main methods are measurable are checked by
     tests/test_selftest.py through ``fixed_step_method``."""
-    from foucault_bench.bench.gate.conformance import ORDER_PERIODS, reference_final_state
-    from foucault_bench.bench.gate.conformance import order_parameters
+    from foucault_bench.bench.gate.order_sweep import ORDER_PERIODS, order_parameters, reference_final_state
     from foucault_bench.integrators import Problem
 
     vern9 = get_integrator("vern9")

@@ -8,7 +8,8 @@ import heyoka
 import numpy as np
 import pytest
 
-from foucault_bench.bench.gate.conformance import ORDER_TOLERANCE, measure_order
+from foucault_bench.bench.gate.conformance import ORDER_TOLERANCE
+from foucault_bench.bench.gate.order_sweep import measure_order
 from foucault_bench.integrators import Problem, get_integrator
 from foucault_bench.models import MODELS, Model, PendulumParameters, richer_models, simpler_models
 from foucault_bench.models import parameters
@@ -156,7 +157,8 @@ def test_a_model_refuses_example_parameters_that_exercise_nothing() -> None:
 
 
 def test_selftest_checks_a_refinement_at_its_example_parameters_not_where_it_equals_its_parent() -> None:
-    from foucault_bench.bench.gate.conformance import ORDER_PARAMS, check_order, order_parameters
+    from foucault_bench.bench.gate.conformance import check_order
+    from foucault_bench.bench.gate.order_sweep import ORDER_PARAMS, order_parameters
 
     assert STIFFENED.equals_parents_at(ORDER_PARAMS)
     params = order_parameters(STIFFENED)
@@ -231,7 +233,7 @@ def test_the_order_check_releases_a_model_on_the_ellipse_it_declares() -> None:
     import dataclasses
     import math
 
-    from foucault_bench.bench.gate.conformance import ORDER_PARAMS, order_parameters
+    from foucault_bench.bench.gate.order_sweep import ORDER_PARAMS, order_parameters
 
     damped = MODELS["damped_linear"]
     params = order_parameters(damped)
