@@ -8,8 +8,8 @@ table ``ARKODE_SPRK_SUZUKI_UMENO_8_16`` and OrdinaryDiffEq.jl's ``McAte8`` (the 
 Hairer, Lubich & Wanner, Geometric Numerical Integration, 2nd ed., §V.3.2 for the order conditions they meet.
 ``Composition`` checks every order condition up to 8 when the module is imported (the residuals are at most
 2e-16; the first one of order 9, the coefficient of a word of weight 9, is 7.7e-3). Stability limit on the
-oscillator: ``Composition.oscillator_stability_limit`` (≈ 3.394: the first kh where |trace| of the product of
-the sub-steps' matrices reaches 2, and the set where it stays below 2 is the whole interval (0, 3.394)).
+oscillator: ``Composition.oscillator_stability_limit`` (≈ 3.393: the first kh where |trace| of the product of
+the sub-steps' matrices reaches 2, and the set where it stays below 2 is the whole interval (0, 3.393)).
 """
 
 from typing import ClassVar
