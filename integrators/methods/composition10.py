@@ -5,7 +5,7 @@
 step (Sofroniou & Spaletta, Optim. Methods Softw. 20, 597 (2005), s35odr10; digits as in SUNDIALS ARKODE's
 table ``ARKODE_SPRK_SOFRONIOU_10_36`` and OrdinaryDiffEq.jl's ``SofSpa10``; the order conditions: Hairer, Lubich
 & Wanner, Geometric Numerical Integration, 2nd ed., §V.3.2). ``Composition`` checks every order condition up
-to 10 when the module is imported (residuals at most 1e-16; the leading one of order 11 is only 1.4e-6, the
+to 10 when the module is imported (residuals at most 2.5e-16; the largest one of order 11 is only 1.4e-6, the
 reason the errors of this method reach round-off after few halvings of the step). Stability limit on the
 oscillator: ``Composition.oscillator_stability_limit`` (≈ 5.974). Compiled as sequences of at most
 ``MAX_COMPILED_SUB_STEPS`` sub-steps (``integrators.composition``).
