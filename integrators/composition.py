@@ -49,7 +49,7 @@ sequence did not compile within 4 minutes, 9 compile in seconds."""
 
 POWER_SUM_TOLERANCE = 1e-14
 """How far from zero an order condition (and from one Σγ) may be, per stage and times max(1, max|γ|) to the
-condition's weight: a few ulp of the largest term (measured on the built-in weights: at most 2e-16 for the
+condition's weight: a few ulp of the largest term (measured on the built-in weights: at most 2.5e-16 for the
 15- and 35-stage compositions, whose every |γ| < 1)."""
 
 
