@@ -217,6 +217,12 @@ class Integrator(ABC):
         default) where rotation only moves the stability limit by O(a/k)."""
         return None
 
+    def fixed_step_method(self) -> "Integrator | None":
+        """The same formula at fixed steps, for an adaptive method whose order is a property of its formula (the
+        main method of an embedded pair; ``bench.gate.conformance`` measures its order that way), or ``None``
+        (the default: no such formula, e.g. a variable-order method)."""
+        return None
+
     def solve(self, problem: Problem, *, step_s: float | None = None, tol: float | None = None,
               monitor: bool = True) -> Solution:
         """Integrate ``problem``; never raises for a run that fails, only for a malformed request.

@@ -15,8 +15,9 @@ import numpy as np
 from scipy.integrate import OdeSolver
 
 from foucault_bench.integrators.adaptive import AdaptiveIntegrator, absolute_tolerance, step_budget, turning_points
-from foucault_bench.integrators.base import STATUS_FAILED, Problem, Solution, StreamedMetrics
+from foucault_bench.integrators.base import STATUS_FAILED, Integrator, Problem, Solution, StreamedMetrics
 from foucault_bench.integrators.embedded_driver import CODE_OK, MESSAGES, STATE_SIZE, build_driver
+from foucault_bench.integrators.explicit_rk import ExplicitRungeKutta
 from foucault_bench.integrators.tableau import ButcherTableau
 from foucault_bench.models import Model
 
@@ -80,6 +81,21 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
             problems = scipy_twin_problems(cls.tableau, twin)
             if problems:
                 raise TypeError(f"{cls.__name__}.steps_of = {twin.__name__}: " + "; ".join(problems))
+
+    main_method_unmeasurable: ClassVar[str] = ""
+    """Why the order of the main method cannot be observed in double precision by the order sweep of
+    ``foucault-bench selftest`` (``bench.gate.conformance``), when it cannot: then ``fixed_step_method`` is None."""
+
+    def fixed_step_method(self) -> Integrator | None:
+        """The pair's main method (c, A, b, order of ``tableau``, without error weights or dense output) stepped
+        at fixed steps by ``integrators.explicit_rk``: the formula whose order the pair declares (None when
+        ``main_method_unmeasurable`` says why its order cannot be observed)."""
+        if self.main_method_unmeasurable:
+            return None
+        pair = self.tableau
+        main = ButcherTableau(name=pair.name, c=pair.c, a=pair.a, b=pair.b, order=pair.order, reference=pair.reference)
+        attributes = {"name": f"{self.name}_main_method", "tableau": main, "reference": pair.reference}
+        return type(f"{type(self).__name__}MainMethod", (ExplicitRungeKutta,), attributes)()
 
     def __init__(self, max_steps: int | None = None) -> None:
         if max_steps is not None and max_steps < 1:

@@ -133,6 +133,13 @@ class Model:
             at their defaults it equals them (``equals_parents_at``), and the adequacy study then compares it with
             none of them (``bench.verdicts.adequacy``). ``()`` (the default): the model differs from its parents
             at every parameter value. Each must appear in ``example_parameters``.
+        order_sweep_ellipse: the minor-to-major axis ratio b/a of the swing the order check of ``foucault-bench
+            selftest`` releases (``bench.gate.order_sweep.order_parameters``): a sideways release speed of
+            b/a · kA. 0 (the default) releases from rest, a planar swing whose speed passes through 0 at every
+            turning point and whose position passes through the centre. A model whose force varies on a scale
+            far below the swing's there (a smoothed |ṙ|ṙ, a drive concentrated near the centre) has complex
+            singularities close to the real time axis on that swing, and a step sweep of a high-order method
+            sees its pre-asymptotic errors, not its order; on an ellipse the bob keeps its distance from both.
     """
 
     name: str
@@ -146,8 +153,12 @@ class Model:
     refines: tuple[str, ...] = ()
     example_parameters: Mapping[str, Any] = field(default_factory=dict)
     adds_parameters: tuple[str, ...] = ()
+    order_sweep_ellipse: float = 0.0
 
     def __post_init__(self) -> None:
+        if not 0.0 <= self.order_sweep_ellipse <= 1.0:
+            raise ValueError(f"model {self.name!r}: order_sweep_ellipse must lie in [0, 1], "
+                             f"got {self.order_sweep_ellipse!r}")
         if self.geometry not in ("plane", "sphere"):
             raise ValueError(f"geometry must be 'plane' or 'sphere', got {self.geometry!r}")
         defaults = {spec.name: spec.default for spec in dataclasses.fields(PendulumParameters)}

@@ -12,8 +12,9 @@ run in full (1 h). The full check over every scene and every default-matrix tole
 integrators/README.md ("Compiled embedded Runge-Kutta pairs").
 
 Every compiled pair (those without a scipy twin too: ``tsit5``, Verner's ``vern7`` and ``vern9``) is also
-checked for its counters and cost basis; Verner's pairs for the declared order of their main methods at fixed
-steps on the models whose forces vary on the swing's scale, and ``vern7`` for the order of its interpolant.
+checked for its counters and cost basis, ``vern9`` for why the selftest leaves its main method's order out (its
+local slopes approach 9 from above down to round-off), and ``vern7`` for the order of its interpolant; the order
+of the other pairs' main methods is the selftest's (tests/test_selftest.py).
 """
 
 from __future__ import annotations
@@ -233,47 +234,33 @@ def test_vern7_s_interpolant_is_order_6_and_not_7() -> None:
     assert dataclasses.replace(type(get_integrator("vern9")).tableau, dense_order=9).dense_order == 9
 
 
-MAIN_METHOD_STEPS = {"vern7": (8, 12, 16, 24, 32, 48, 64), "vern9": (4, 6, 8, 12, 16, 24, 32)}
-"""Steps per small-swing period for the order of a pair's main method, in ratios 3/2 and 4/3: from about 1e-6 of
-the amplitude to above the round-off floor (measured on the linear model: vern7 1.1e-6 … 2.9e-13, vern9
-8.0e-6 … 2.9e-14)."""
-
-SHORT_SCALE_MODELS = {
-    "damped_linear": "the drag's speed floor v_s = 1 mm/s (observed 6.85 and 9.47, errors stalling near 1e-10)",
-    "driven_linear": "the drive's 5 cm width against a 0.3 m swing (observed 4.51 and 7.88)",
-}
-"""Models whose forces vary on scales far below the swing's at their example parameters: at these steps the
-errors of an order-7 or order-9 method are not asymptotic yet (integrators/README.md "Verner's pairs")."""
+VERN9_STEPS = (8, 10, 12, 14, 16, 18, 20, 23, 26, 29, 32, 36)
+"""Steps of one run over the selftest's order duration: kh from 0.88 to 0.20, errors 5e-8 … 3e-14 on the linear
+model (its closed form is the reference), where vern9's main method is still above round-off."""
 
 
-@pytest.mark.parametrize("name", sorted(MAIN_METHOD_STEPS))
-@pytest.mark.parametrize("model_name", [name for name in MODELS if name not in SHORT_SCALE_MODELS])
-def test_the_main_method_of_a_verner_pair_has_the_declared_order(name: str, model_name: str) -> None:
-    """The pair's c, A and b stepped at fixed steps (``integrators.explicit_rk``) over the selftest's order run
-    (``ORDER_PERIODS`` periods at the model's example parameters, against the selftest's reference): the observed
-    order (``bench.verdicts.convergence.observed_order``) is the declared one within 0.1 (measured 7.08-7.10 and
-    9.04-9.06). The selftest itself skips adaptive integrators; run on these main methods, its halvings from
-    kh ≈ 0.9 reach its 1e-10 floor within 3-4 points, where the terms after the leading one (whose coefficient
-    Verner minimised) still tilt the slope: 7.3 and 9.7 on the linear model."""
-    from foucault_bench.bench.gate.conformance import ORDER_PERIODS, order_parameters, reference_final_state
-    from foucault_bench.bench.verdicts.convergence import observed_order
+def test_vern9s_main_method_approaches_order_9_from_above_down_to_round_off() -> None:
+    """Why the selftest does not check vern9's order (``Vern9.main_method_unmeasurable``): with the steps really
+    taken (duration / n), the local slopes of its final-position error fall steadily from above 10 towards 9 and are
+    still above 9.1 where the error reaches 3e-14: order 9, as declared (never below 8.9, so not 8), yet no fit
+    above round-off comes within 0.15 of it. The pairs whose main methods are measurable are checked by
+    tests/test_selftest.py through ``fixed_step_method``."""
+    from foucault_bench.bench.gate.order_sweep import ORDER_PERIODS, order_parameters, reference_final_state
     from foucault_bench.integrators import Problem
-    from foucault_bench.integrators.explicit_rk import ExplicitRungeKutta
-    from foucault_bench.integrators.tableau import ButcherTableau
 
-    pair = type(get_integrator(name)).tableau
-    plain = ButcherTableau(name=pair.name, c=pair.c, a=pair.a, b=pair.b, order=pair.order, reference=pair.reference)
-    method = type("MainMethod", (ExplicitRungeKutta,), {"name": f"{name}_main", "tableau": plain,
-                                                        "reference": pair.reference})()
-    model = MODELS[model_name]
-    params = order_parameters(model)
+    vern9 = get_integrator("vern9")
+    assert vern9.fixed_step_method() is None and "round-off" in vern9.main_method_unmeasurable
+    main = type("MeasurableVern9", (type(vern9),), {"main_method_unmeasurable": ""})().fixed_step_method()
+    assert main is not None and main.order == 9 and main.stages == 16
+    params = order_parameters(MODELS["linear"])
     duration_s = ORDER_PERIODS * params.small_swing_period_s
-    reference = reference_final_state(model, params, duration_s)
-    problem = Problem(model, params, np.array([0.0, duration_s]))
-    steps_s = [params.small_swing_period_s / n for n in MAIN_METHOD_STEPS[name]]
-    errors = [float(np.hypot(*(method.solve(problem, step_s=h, monitor=False).y[-1, :2] - reference[:2])))
-              / params.amplitude_m for h in steps_s]
-    assert observed_order(steps_s, errors) == pytest.approx(pair.order, abs=0.1), errors
+    reference = reference_final_state(MODELS["linear"], params, duration_s)
+    problem = Problem(MODELS["linear"], params, np.array([0.0, duration_s]))
+    errors = [float(np.hypot(*(main.solve(problem, step_s=duration_s / n, monitor=False).y[-1, :2] - reference[:2])))
+              / params.amplitude_m for n in VERN9_STEPS]
+    slopes = np.diff(np.log(errors)) / np.diff(np.log(VERN9_STEPS)) * -1.0
+    assert errors[-1] > 1e-14 and slopes[0] > 10.0 and slopes[-1] > 9.1, (errors, slopes)
+    assert np.all(slopes > 8.9) and np.all(np.diff(slopes) < 0.02), slopes
 
 
 def test_the_pairs_are_derived_from_the_declarations() -> None:

@@ -92,7 +92,7 @@ def test_quadratic_invariant_kept_to_round_off_over_a_long_run(name: str) -> Non
 @pytest.mark.parametrize("name", [n for n in FIXED_STEP if REGISTRY[n].stability_limit_kh is not None])
 def test_measured_stability_limit_is_the_declared_one(name: str) -> None:
     declared = REGISTRY[name].stability_limit_kh
-    grid = np.round(np.arange(0.1, 4.05, 0.1), 6)
+    grid = np.round(np.arange(0.1, max(4.0, 1.1 * declared) + 0.05, 0.1), 6)  # composition10's limit is 5.97
     measured = measured_stability_limit(REGISTRY[name], NO_ROTATION, grid, resolution_kh=1e-5)
     # 1e-3: the implicit schemes' solve stops certifying convergence 4e-4 below its limit (integrators.gauss)
     assert measured == pytest.approx(declared, rel=1e-3)
@@ -124,6 +124,37 @@ def test_symplectic_euler_diverges_with_rotation_when_its_growth_law_says() -> N
     assert solutions["none"].status == "ok"
     assert solutions["rotation"].status == "diverged"
     assert 0.8 * predicted < solutions["rotation"].steps < 1.2 * predicted
+
+
+def test_composition_order_conditions_include_the_coupled_ones() -> None:
+    """``Composition`` checks every order condition of its declared order, not only the power sums Σγᵏ = 0
+    (integrators/composition.py): a symmetric seven-stage composition whose Σγ³ and Σγ⁵ vanish (solved for
+    γ₁ = ½) but whose coupled condition of weight 5 does not is refused at order 6, though it is of
+    order 4 (the words Y₁Y₁Y₃, Y₁Y₃Y₁, Y₃Y₁Y₁: the commutator [Y₁, [Y₁, Y₃]]); Yoshida's triple jump of triple
+    jumps (9 stages) meets all conditions of order 6 and not those of 8;
+    the built-in compositions meet theirs (residuals at most a few ulp) and not those of the next order."""
+    from foucault_bench.integrators.composition import order_condition_residuals
+    from foucault_bench.integrators.methods.composition8 import S15_ORDER8
+    from foucault_bench.integrators.methods.composition10 import SOFRONIOU_SPALETTA_S35ODR10
+
+    inner = (0.5, -0.8580459421026114, 0.37367931617363953)
+    weights = (*inner, 1.0 - 2.0 * sum(inner), *reversed(inner))
+    assert abs(sum(g**3 for g in weights)) < 1e-14 and abs(sum(g**5 for g in weights)) < 1e-14
+    assert Composition(weights=weights, order=4).order == 4
+    with pytest.raises(ValueError, match=r"order 6 needs the coupled condition of Y\(1, 1, 3\)"):
+        Composition(weights=weights, order=6)
+    outer = 1.0 / (2.0 - 2.0 ** 0.2)  # the triple jump raising order 4 to 6 (Yoshida 1990, eq. (4.14))
+    suzuki = tuple(a * b for a in (outer, 1.0 - 2.0 * outer, outer) for b in triple_jump(4).weights)
+    assert Composition(weights=suzuki, order=6).stages == 9
+    with pytest.raises(ValueError, match="order 8 needs"):
+        Composition(weights=suzuki, order=8)
+    for composition in (S15_ORDER8, SOFRONIOU_SPALETTA_S35ODR10):
+        residuals = order_condition_residuals(composition.weights, composition.order)
+        assert max(abs(value) for value in residuals.values()) < 1e-15
+        next_order = order_condition_residuals(composition.weights, composition.order + 1)
+        assert max(abs(value) for value in next_order.values()) > 1e-7
+    with pytest.raises(ValueError, match="order 10 needs"):
+        Composition(weights=S15_ORDER8.weights, order=10)
 
 
 def test_composition_weights_validate_themselves() -> None:

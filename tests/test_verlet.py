@@ -79,7 +79,7 @@ def test_verlet_precession_error_on_the_sphere_depends_on_the_release_direction(
 
 
 @pytest.mark.parametrize("model", sorted(MODELS))
-@pytest.mark.parametrize("name", ["yoshida4", "composition6"])
+@pytest.mark.parametrize("name", ["yoshida4", "composition6", "composition8", "composition10"])
 def test_a_composition_step_is_its_verlet_sub_steps_in_a_row(model: str, name: str) -> None:
     """A composition step merges the half rotations of neighbouring sub-steps and stays in canonical variables
     (``verlet_sequence``); it must be the same map as the Verlet steps γ₁h, …, γₛh taken one after the other,

@@ -4,21 +4,13 @@ An integrator declares facts (``integrators.base.Integrator``: order, stages, ad
 module measures them, on small problems that take seconds, so that a plug-in author learns in one command
 whether the suite will treat the method correctly. Every check returns a ``Check`` (a row), never raises:
 
-1. **order on MODEL**, for every model and every fixed-step integrator with a declared order p: the observed
-   order of the final-position error over a step sweep (``measure_order``) lies within ``ORDER_TOLERANCE`` of
-   p. The sweep runs at the model's declared ``example_parameters`` (``order_parameters``), so a model that adds
-   a parameter is checked where that parameter acts, not only where it equals its parent model. The sweep is derived from the declared facts: it starts at kh = min(½ stability limit, ``START_KH``),
-   halves kh until the error falls below ``MAX_ERROR`` and then keeps ``points_needed(p)`` more points (enough
-   halvings to span ``SPAN_DECADES`` decades of error at order p), stopping early at the round-off floor
-   ``FLOOR_ERROR`` (a method of high order whose first point lies within one halving of that floor starts
-   again at twice the step, up to ½ its stability limit: the order-10 composition is at 1.5e-12 at kh = 0.47);
-   ``bench.verdicts.convergence.observed_order`` fits the slope on the finest points (the
-   same rule the report and the gate use). The sweep runs with Earth's rotation sped up to
-   ``ROTATION_OVER_SWING`` × k: at the real rate (Ω_E/k ≈ 1e-5) an error term proportional to Ω h, such as an
-   explicit Coriolis kick in a Verlet scheme, stays below the (kh)² term at every measurable step and a wrong
-   order would go unseen. References: the closed form for the linear model (``models.analytic``), heyoka's
-   Taylor method at ``REFERENCE_TOL`` for the others (errors ~1e-15 of the amplitude, far below ``FLOOR_ERROR``).
-   Adaptive integrators are skipped: error against tolerance is no order.
+1. **order on MODEL**, for every model and every integrator with a declared order p that steps at fixed steps,
+   or is an adaptive pair whose main method can (``Integrator.fixed_step_method``: the embedded Runge-Kutta pairs'
+   c, A and b at fixed steps, ``integrators.embedded_rk``; ``tsit5`` and ``vern9`` say why theirs cannot be
+   measured in double precision, ``main_method_unmeasurable``): the observed order of the final-position error
+   over the step sweep of ``bench.gate.order_sweep`` (``measure_order``: its docstring says how the sweep is
+   derived from the declared facts and the model's) lies within ``ORDER_TOLERANCE`` of p. Adaptive integrators
+   without a fixed-step formula are skipped: error against tolerance is no order.
 2. **stable below the limit** and **diverges above the limit**, for every declared ``stability_limit_kh``:
    on the undamped oscillator ẍ = −k²x (the linear model with no rotation, where the limit is defined;
    Hairer, Nørsett & Wanner, Solving ODEs I, §IV.2) the energy error reached after ``STABILITY_STEPS`` steps
@@ -47,36 +39,21 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from typing import Callable, Iterator, cast
+from typing import Callable, Iterator
 
 import numpy as np
 
-from foucault_bench.bench.verdicts.convergence import observed_order
-from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK, Integrator, Problem, get_integrator
+from foucault_bench.bench.gate.order_sweep import measure_order, order_parameters
+from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK, Integrator, Problem
 from foucault_bench.models import MODELS, Model, PendulumParameters
-from foucault_bench.models.analytic import linear_exact
 from foucault_bench.models.parameters import P_K2, P_LENGTH
 
 ORDER_TOLERANCE = 0.15
 """|observed − declared order| allowed. The fit over the finest points still carries the next error term,
-relatively O(kh) smaller: measured on the built-in methods, every model, |observed − declared| ≤ 0.06 (RK4 3.94);
-a wrong method is off by a whole order or more (the mutants of tests/check_mutants.py: 1.9 for 4, 1.0 for 2)."""
-
-START_KH = 0.5
-MAX_ERROR = 0.1
-"""Errors (of the final position, in units of the amplitude) above this are not asymptotic yet."""
-FLOOR_ERROR = 1e-10
-"""Below this, accumulated round-off (~1e-16 per step) starts to show: the sweep stops."""
-SPAN_DECADES = 2.0
-MIN_POINTS = 5
-MAX_RUN_STEPS = 4_000_000
-"""A sweep needing more steps in one run than this reports the order check as failed (too slow to converge)."""
-ORDER_PERIODS = 1.125
-"""Sweep duration: kt = 2.25π, neither a turning point nor a zero crossing, where a phase (resp. amplitude)
-error would be hidden and a higher order observed."""
-ROTATION_OVER_SWING = 0.2
-REFERENCE_INTEGRATOR = "heyoka_taylor"
-REFERENCE_TOL = 1e-15
+relatively O(kh) smaller: measured on the built-in methods, every model, |observed − declared| ≤ 0.06 up to order 6
+(RK4 3.94); above, 0.14 (vern7's main method on the drag and drive models, 7.14), 0.11 (composition10 on the
+sphere, 10.11), 0.06 (dop853's main method, composition8); a wrong method is off by a whole order or more (the
+mutants of tests/check_mutants.py: 1.9 for 4, 1.0 for 2)."""
 
 STABILITY_MARGIN = 0.01
 STABILITY_STEPS = 20_000
@@ -88,8 +65,6 @@ to round-off (implicit midpoint, Gauss-Legendre: a quadratic invariant) random-w
 (their fixed-point iteration stops near round-off), while an unstable mode grows exponentially, to O(1) and
 beyond, in as many steps."""
 
-ORDER_PARAMS = PendulumParameters(length_m=3.0, latitude_deg=40.44, amplitude_m=0.3,
-                                  earth_rate_rad_s=ROTATION_OVER_SWING * math.sqrt(9.81 / 3.0))
 OSCILLATOR = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0, earth_rate_rad_s=0.0)
 SHORT_RUN = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
 SHORT_RUN_PERIODS = 4.25
@@ -145,94 +120,26 @@ FAILING = Model(name="selftest_failing", title="selftest: force raises", geometr
 BLOW_UP_PARAMS = PendulumParameters(length_m=1.0, latitude_deg=45.0, amplitude_m=0.6, earth_rate_rad_s=0.0)
 
 
-# --- order -----------------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class OrderMeasurement:
-    """A step sweep: step sizes (s), final-position errors (units of the amplitude) and the fitted order."""
-
-    step_sizes_s: np.ndarray
-    errors: np.ndarray
-    order: float
-    note: str = ""
-
-
-def points_needed(order: int) -> int:
-    """Sweep points below ``MAX_ERROR``: enough halvings to span ``SPAN_DECADES`` decades at order p."""
-    return max(MIN_POINTS, math.ceil(SPAN_DECADES / (order * math.log10(2.0))) + 1)
-
-
-def reference_final_state(model: Model, params: PendulumParameters, duration_s: float) -> np.ndarray:
-    """The exact final state for the linear model, heyoka's Taylor method at ``REFERENCE_TOL`` otherwise."""
-    if model is MODELS.get("linear"):
-        return linear_exact(params, np.array([duration_s]))[0]
-    problem = Problem(model, params, np.array([0.0, duration_s]))
-    solution = get_integrator(REFERENCE_INTEGRATOR).solve(problem, tol=REFERENCE_TOL, monitor=False)
-    if solution.status != STATUS_OK:
-        raise RuntimeError(f"the reference run failed: {solution.message}")
-    return solution.y[-1]
-
-
-def order_parameters(model: Model) -> PendulumParameters:
-    """The parameters of the order sweep on ``model``: ``ORDER_PARAMS`` with the model's declared
-    ``example_parameters`` applied, so that what the model adds to its parents acts in the sweep."""
-    return model.with_example_parameters(ORDER_PARAMS)
-
-
-def measure_order(integrator: Integrator, model: Model, params: PendulumParameters | None = None,
-                  periods: float = ORDER_PERIODS) -> OrderMeasurement:
-    """Observed order of ``integrator`` on ``model`` over a step sweep derived from its declared facts (see the
-    module docstring, check 1), at ``params`` (default: ``order_parameters(model)``)."""
-    params = order_parameters(model) if params is None else params
-    duration = periods * params.small_swing_period_s
-    k = params.pendulum_frequency_rad_s
-    reference = reference_final_state(model, params, duration)
-    problem = Problem(model, params, np.array([0.0, duration]))
-    limit = integrator.stability_limit_kh
-    kh = min(START_KH, 0.5 * limit) if limit else START_KH
-    order = cast(int, integrator.order)  # check_order runs for a declared order only
-    wanted = points_needed(order)
-    steps: list[float] = []
-    errors: list[float] = []
-    note = ""
-    while sum(error <= MAX_ERROR for error in errors) < wanted:
-        n_steps = math.ceil(k * duration / kh)
-        if n_steps > MAX_RUN_STEPS:
-            note = f"stopped at {MAX_RUN_STEPS} steps per run"
-            break
-        solution = integrator.solve(problem, step_s=duration / n_steps, monitor=False)
-        error = math.inf
-        if solution.status == STATUS_OK:
-            error = float(np.hypot(*(solution.y[-1, :2] - reference[:2])) / params.amplitude_m)
-        steps.append(duration / n_steps)
-        errors.append(error)
-        if len(errors) == 1 and error < FLOOR_ERROR * 2.0 ** order and limit and 2 * kh <= 0.5 * limit:
-            steps.clear()  # a high order: the next halving would reach the floor, so start coarser
-            errors.clear()
-            kh *= 2.0
-            continue
-        if error < FLOOR_ERROR:
-            break
-        kh *= 0.5
-    h, e = np.array(steps), np.array(errors)
-    return OrderMeasurement(h, e, observed_order(steps, errors), note)
-
-
 # --- the checks ------------------------------------------------------------------------------------------------
 
 
 def check_order(integrator: Integrator, model: Model) -> Check:
     name = f"order on {model.name}"
-    if integrator.adaptive or integrator.order is None:
-        why = "adaptive: error against tolerance is no order" if integrator.adaptive else "no order declared"
+    stepped = integrator.fixed_step_method() if integrator.adaptive else integrator
+    if stepped is None or integrator.order is None:
+        unmeasurable = getattr(integrator, "main_method_unmeasurable", "")
+        why = ("no order declared" if integrator.order is None
+               else f"adaptive, main method not measurable here: {unmeasurable}" if unmeasurable
+               else "adaptive, with no fixed-step formula: error against tolerance is no order")
         return Check(name, None, why)
     params = order_parameters(model)
-    measured = measure_order(integrator, model, params)
+    measured = measure_order(stepped, model, params)
     holds = bool(abs(measured.order - integrator.order) <= ORDER_TOLERANCE)
     points = ", ".join(f"{error:.1e}" for error in measured.errors[np.isfinite(measured.errors)][-4:])
     example = "".join(f", {key} = {value!r}" for key, value in model.example_parameters.items())
-    detail = (f"observed order {measured.order:.2f} of the final-position error, declared {integrator.order}, "
+    detail = (f"observed order {measured.order:.2f} of the final-position error"
+              + (f" of its main method at fixed steps ({stepped.name})" if stepped is not integrator else "")
+              + f", declared {integrator.order}, "
               f"allowed ±{ORDER_TOLERANCE}: {'held' if holds else 'NOT held'}; "
               f"{measured.errors.size} steps down to kh = {measured.step_sizes_s[-1] * params.pendulum_frequency_rad_s:.2g}"
               f"{example}, finest errors {points}" + (f"; {measured.note}" if measured.note else ""))

@@ -59,5 +59,10 @@ class Tsit5(EmbeddedRungeKutta):
     """Tsitouras 5(4) with scipy's error norm, controller and initial step, compiled."""
 
     name: ClassVar[str] = "tsit5"
+    main_method_unmeasurable: ClassVar[str] = (
+        "Tsitouras minimised the leading error coefficients, so the next term dominates down to round-off: "
+        "local slopes of the final-position error on the linear model 5.54, 5.43, 5.27, 5.14, 5.07, 4.99 as kh "
+        "halves from 0.47 to 0.0074 (errors 1.9e-5 ... 6.6e-15); the order fit over the finest points is 5.2-5.3"
+    )
     tableau: ClassVar[ButcherTableau] = TABLEAU
     reference: ClassVar[str] = TABLEAU.reference
