@@ -95,7 +95,7 @@ def test_an_unknown_integrator_becomes_a_failed_run_not_a_crash(energy_table: pd
     assert missing["energy_rel_error"].isna().all()
 
 
-STABILITY = StabilitySweepConfig(steps=400, kh=(0.5, 1.9, 2.1, 2.7, 2.9, 3.5))
+STABILITY = StabilitySweepConfig(steps=400, kh=(0.5, 1.9, 2.1, 2.7, 2.9, 3.5, 6.1))
 
 
 @pytest.fixture(scope="module")

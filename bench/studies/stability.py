@@ -40,7 +40,7 @@ class StabilitySweepConfig:
     latitude_deg: float = 48.846
     amplitude_m: float = 1.0
     steps: int = 20_000
-    kh: tuple[float, ...] = (0.01, 0.02, 0.05, *np.round(np.linspace(0.1, 4.0, 40), 6))
+    kh: tuple[float, ...] = (0.01, 0.02, 0.05, *np.round(np.linspace(0.1, 4.0, 40), 6), 4.5, 5.0, 5.5, 6.0, 6.5)
     limit_resolution_kh: float = 1e-4
 
 

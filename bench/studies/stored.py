@@ -35,7 +35,8 @@ STUDIES: dict[str, Study] = {
     for study in (
         # version 2: one representative per family from the declared facts, one tolerance for the adaptive ones
         Study("study_long_time_energy", long_time_energy, LongTimeEnergyConfig(), version=2),
-        Study("study_stability", stability_sweep, StabilitySweepConfig()),
+        # version 2: the k·h grid goes on to 6.5, so that every declared limit (composition10: 5.97) lies inside it
+        Study("study_stability", stability_sweep, StabilitySweepConfig(), version=2),
         Study("study_precession_latitude", precession_vs_latitude, PrecessionLatitudeConfig()),
         # version 2: kh is the step taken (kh_requested the configured one); no rk4
         Study("study_release_azimuth", precession_vs_release_azimuth, ReleaseAzimuthConfig(), version=2),
