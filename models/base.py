@@ -133,6 +133,11 @@ class Model:
             at their defaults it equals them (``equals_parents_at``), and the adequacy study then compares it with
             none of them (``bench.verdicts.adequacy``). ``()`` (the default): the model differs from its parents
             at every parameter value. Each must appear in ``example_parameters``.
+        taylor_step_watch: source ``(m, x, y, vx, vy, p) -> quantity`` of a term of the force whose Taylor series
+            heyoka's step control must see (``heyoka_taylor_system``): one with complex-time singularities close
+            to the real axis but too small a weight in the force for the state's own Taylor coefficients to show
+            them at the orders of ordinary tolerances (the quadratic drag's smoothed speed, models/README.md
+            "Drag and drive"); identically zero where that term is off. ``None`` (the default): none.
     """
 
     name: str
@@ -146,6 +151,7 @@ class Model:
     refines: tuple[str, ...] = ()
     example_parameters: Mapping[str, Any] = field(default_factory=dict)
     adds_parameters: tuple[str, ...] = ()
+    taylor_step_watch: Callable | None = None
 
     def __post_init__(self) -> None:
         if self.geometry not in ("plane", "sphere"):
@@ -295,6 +301,30 @@ class Model:
         pars = [heyoka.par[i] for i in range(PARAMETER_COUNT)]
         ax, ay = self.acceleration(heyoka_math(), x, y, vx, vy, pars)
         return [(x, vx), (y, vy), (vx, ax), (vy, ay)]
+
+    def heyoka_taylor_system(self) -> list:
+        """The system heyoka's Taylor integrators propagate: ``heyoka_system`` and, for a model with a
+        ``taylor_step_watch`` q, a fifth variable w with ẇ = Σ_i ∂q/∂s_i ṡ_i, i.e. q along the solution when it
+        starts at q's value (``taylor_initial_state``). w feeds back into nothing, so the four equations and
+        their Taylor coefficients are those of ``heyoka_system``; heyoka sizes each step from the last two
+        Taylor coefficients of every variable (Jorba & Zou, Exp. Math. 14, 99 (2005)), so w's make it see q's
+        singularities and shorten its steps near them."""
+        import heyoka
+
+        system = self.heyoka_system()
+        if self.taylor_step_watch is None:
+            return system
+        variables = [variable for variable, _ in system]
+        watched = self.taylor_step_watch(heyoka_math(), *variables, [heyoka.par[i] for i in range(PARAMETER_COUNT)])
+        rate = heyoka.sum([heyoka.diff(watched, variable) * rhs for variable, rhs in system])
+        return system + [(heyoka.make_vars("taylor_step_watch"), rate)]
+
+    def taylor_initial_state(self, state: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """The initial state of ``heyoka_taylor_system`` for the model's state and full parameter vector ``p``:
+        the state, and the watched quantity's value there for a model with a ``taylor_step_watch``."""
+        if self.taylor_step_watch is None:
+            return np.asarray(state, dtype=np.float64)
+        return np.append(state, self.taylor_step_watch(math, *state, p))
 
     @functools.cached_property
     def heyoka_parameter_count(self) -> int:

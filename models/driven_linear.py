@@ -48,4 +48,5 @@ MODEL = Model(
     refines=("damped_linear",),
     example_parameters={"drive_gain_per_s": 3.0e-3, "drive_radius_m": 0.05},
     adds_parameters=("drive_gain_per_s",),
+    taylor_step_watch=damped_linear.quadratic_drag_watch,
 )
