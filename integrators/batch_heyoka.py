@@ -47,7 +47,8 @@ def _batch_template(model: Model, heyoka_tol: float, batch_size: int):
     """The JIT-compiled batch integrator for one (model, ε, lanes), placeholder state; each thread copies it."""
     import heyoka
 
-    return heyoka.taylor_adaptive_batch(model.heyoka_system(), np.zeros((4, batch_size)), tol=heyoka_tol,
+    system = model.heyoka_taylor_system()
+    return heyoka.taylor_adaptive_batch(system, np.zeros((len(system), batch_size)), tol=heyoka_tol,
                                         pars=np.zeros((model.heyoka_parameter_count, batch_size)))
 
 
@@ -87,7 +88,8 @@ def heyoka_batch_runs(integrator: HeyokaTaylor, problems: Sequence[Problem], ste
         budget = integrator.max_steps or min(step_budget(problem.params, problem.t_end_s) for problem in group)
         batch = working_batch_integrator(model, heyoka_tol, batch_size)
         batch.set_time(np.zeros(batch_size))
-        batch.state[:] = np.array([problem.initial_state for problem in group]).T
+        batch.state[:] = np.array([model.taylor_initial_state(problem.initial_state, problem.parameter_vector)
+                                   for problem in group]).T
         batch.pars[:] = np.array([model.heyoka_parameters(problem.parameter_vector) for problem in group]).T
         taken = np.zeros(batch_size, dtype=np.int64)
         if t_out[0] > 0.0:  # propagate_grid starts at the integrator's time

@@ -140,6 +140,11 @@ class Model:
             far below the swing's there (a smoothed |ṙ|ṙ, a drive concentrated near the centre) has complex
             singularities close to the real time axis on that swing, and a step sweep of a high-order method
             sees its pre-asymptotic errors, not its order; on an ellipse the bob keeps its distance from both.
+        taylor_step_watch: source ``(m, x, y, vx, vy, p) -> quantity`` of a term of the force whose Taylor series
+            heyoka's step control must see (``heyoka_taylor_system``): one with complex-time singularities close
+            to the real axis but too small a weight in the force for the state's own Taylor coefficients to show
+            them at the orders of ordinary tolerances (the quadratic drag's smoothed speed, models/README.md
+            "Drag and drive"); identically zero where that term is off. ``None`` (the default): none.
     """
 
     name: str
@@ -154,6 +159,7 @@ class Model:
     example_parameters: Mapping[str, Any] = field(default_factory=dict)
     adds_parameters: tuple[str, ...] = ()
     order_sweep_ellipse: float = 0.0
+    taylor_step_watch: Callable | None = None
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.order_sweep_ellipse <= 1.0:
@@ -306,6 +312,30 @@ class Model:
         pars = [heyoka.par[i] for i in range(PARAMETER_COUNT)]
         ax, ay = self.acceleration(heyoka_math(), x, y, vx, vy, pars)
         return [(x, vx), (y, vy), (vx, ax), (vy, ay)]
+
+    def heyoka_taylor_system(self) -> list:
+        """The system heyoka's Taylor integrators propagate: ``heyoka_system`` and, for a model with a
+        ``taylor_step_watch`` q, a fifth variable w with ẇ = Σ_i ∂q/∂s_i ṡ_i, i.e. q along the solution when it
+        starts at q's value (``taylor_initial_state``). w feeds back into nothing, so the four equations and
+        their Taylor coefficients are those of ``heyoka_system``; heyoka sizes each step from the last two
+        Taylor coefficients of every variable (Jorba & Zou, Exp. Math. 14, 99 (2005)), so w's make it see q's
+        singularities and shorten its steps near them."""
+        import heyoka
+
+        system = self.heyoka_system()
+        if self.taylor_step_watch is None:
+            return system
+        variables = [variable for variable, _ in system]
+        watched = self.taylor_step_watch(heyoka_math(), *variables, [heyoka.par[i] for i in range(PARAMETER_COUNT)])
+        rate = heyoka.sum([heyoka.diff(watched, variable) * rhs for variable, rhs in system])
+        return system + [(heyoka.make_vars("taylor_step_watch"), rate)]
+
+    def taylor_initial_state(self, state: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """The initial state of ``heyoka_taylor_system`` for the model's state and full parameter vector ``p``:
+        the state, and the watched quantity's value there for a model with a ``taylor_step_watch``."""
+        if self.taylor_step_watch is None:
+            return np.asarray(state, dtype=np.float64)
+        return np.append(state, self.taylor_step_watch(math, *state, p))
 
     @functools.cached_property
     def heyoka_parameter_count(self) -> int:

@@ -53,4 +53,5 @@ MODEL = Model(
 
     order_sweep_ellipse=0.8,
     adds_parameters=("drive_gain_per_s",),
+    taylor_step_watch=damped_linear.quadratic_drag_watch,
 )

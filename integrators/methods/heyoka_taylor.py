@@ -2,7 +2,7 @@
 the suite's reference) precision.
 
 Method: Taylor series of the solution computed to order p by automatic differentiation of the model's
-expressions (``Model.heyoka_system``, JIT-compiled by LLVM); p = ⌈−½ ln ε + 1⌉ (20 at ε = 2.2e-16, 39 at
+expressions (``Model.heyoka_taylor_system``: ``Model.heyoka_system`` and a model's step watch, JIT-compiled by LLVM); p = ⌈−½ ln ε + 1⌉ (20 at ε = 2.2e-16, 39 at
 1e-33) and the step h from the last two Taylor coefficients so that the truncated remainder is about ε
 (Jorba & Zou, Exp. Math. 14, 99 (2005); Biscani & Izzo, MNRAS 504, 2614 (2021)). The order is fixed by the
 tolerance, so ``order`` is ``None`` here and the run's order is in ``Solution.extra["taylor_order"]``.
@@ -111,8 +111,8 @@ def _compiled_template(model: Model, precision: str, heyoka_tol: float, with_eve
     import heyoka
 
     fp_type = _fp_type(precision)
-    system = model.heyoka_system()
-    x, y, vx, vy = (variable for variable, _ in system)
+    system = model.heyoka_taylor_system()
+    x, y, vx, vy = (variable for variable, _ in system[:4])
     events = []
     if with_events:
         events = [heyoka.nt_event(x * vx + y * vy, _TurningPointRecorder(),
@@ -189,7 +189,7 @@ def prepared_run(problem: Problem, precision: str, tol: float, monitor: bool, ma
         problem=problem, key=key, integrator=integrator, heyoka_tol=heyoka_tol,
         budget=max_steps or step_budget(problem.params, problem.t_end_s), order=integrator.order,
         fp_zero=fp_type(0.0), grid=grid, starts_late=bool(problem.t_out[0] > 0.0),
-        state0=np.asarray(problem.initial_state, dtype=fp_type),
+        state0=np.asarray(model.taylor_initial_state(problem.initial_state, problem.parameter_vector), dtype=fp_type),
         pars=np.asarray(model.heyoka_parameters(problem.parameter_vector), dtype=fp_type),
         state_view=integrator.state, pars_view=integrator.pars,  # views of the integrator's own buffers
     )
@@ -200,7 +200,8 @@ def taylor_solution(problem: Problem, states, steps: int, order: int, heyoka_tol
                     budget: int) -> Solution:
     """The ``Solution`` of one heyoka propagation (also one lane of a batch, ``integrators.batch_heyoka``): the
     grid states reached (NaN after a failure), the counters and the outcome as status and message."""
-    y = np.asarray(states, dtype=np.float64)  # a new array: heyoka returns it for this call
+    y = np.asarray(states, dtype=np.float64)[:, :4]  # a new array: heyoka returns it for this call; the
+    # columns after the state are those of the model's step watch (``Model.heyoka_taylor_system``)
     t_out = problem.t_out
     if len(y) < t_out.size:  # the rows reached, fewer after a failure; NaN after
         y = np.vstack([y, np.full((t_out.size - len(y), 4), np.nan)])
