@@ -115,8 +115,8 @@ class ExplicitRungeKutta(FixedStepIntegrator):
     family: ClassVar[str] = "runge-kutta"
     compensated_update: ClassVar[bool] = True
     """The loop adds the step's increment to the state with compensated summation (``integrators.fixed_step``):
-    1.01-1.06× the loop's time for Heun's method and RK4 (bench/PERF.md "Round-off"); ``False`` where it costs more
-    than the issue's 10 %."""
+    1.01-1.08× the loop's time for Heun's method and RK4 (bench/PERF.md "Round-off"); ``False`` where it costs more
+    than 10 %, and in a subclass that replaces ``make_step`` (the loop would advance by the tableau's increment)."""
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
