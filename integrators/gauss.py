@@ -16,6 +16,9 @@ increments oscillate as they decay, its matrix h A⊗J is not normal, so a singl
 round-off.) An earlier exit, once the error estimated from the contraction was below half an ulp, left an error
 that is a smooth function of the state, the same from step to step: the linear model's energy drifted linearly,
 1.2e-10 (two-stage) and 3.6e-11 (midpoint) in 10⁶ steps at kh 0.5 (``bench.studies.long_time_roundoff``).
+What the converged stages still carry is a selection: the rounded iteration map has several fixed points within an
+ulp, the iteration stops at the one on the side it came from, and on the linear model at kh 0.5 that leaves an
+energy drift of about 1e-3 ε per step (bench/PERF.md "Where the Gauss methods' drift comes from").
 ΔZ is measured relative to the state in the oscillator's energy norm, √(k²|Δr|² + |Δv|²)/(k(|x| + |y|) + |vx| +
 |vy|), k² = g/L. If the increment exceeds ``DIVERGED_INCREMENT`` or ``MAX_SWEEPS`` sweeps pass, the iteration has
 not converged: the step returns NaN and the run is reported ``diverged``.

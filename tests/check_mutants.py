@@ -30,6 +30,7 @@ MUTANT_NAMES = ("rk4_wrong_weights", "verlet_naive_coriolis")
 class RK4WrongWeights(RK4):
     name: ClassVar[str] = "rk4_wrong_weights"
     reference: ClassVar[str] = "mutant of integrators.methods.rk4 for tests/test_check.py: weights (1, 3, 1, 1)/6"
+    compensated_update: ClassVar[bool] = False  # the loop advances by make_step, not by RK4's tableau increment
 
     def make_step(self, model: Model) -> Callable:
         acceleration = model.numba_acceleration

@@ -29,7 +29,8 @@ EXPONENT_BOUND = 0.7
 """Brouwer's ½ plus 0.2 for the fit of a median of 5 random walks over two decades (measured 0.49-0.52)."""
 BROUWER_SCHEMES = ("verlet", "yoshida4", "composition6")
 """The schemes whose exponent reaches Brouwer's law; the Gauss-Legendre methods keep a systematic part of about
-1e-3 ε per step which shows beyond 10⁵ steps (bench/PERF.md "Round-off")."""
+1e-3 ε per step which shows beyond 10⁵ steps, from the selection of the rounded solve's fixed point (bench/PERF.md
+"Where the Gauss methods' drift comes from")."""
 
 
 @pytest.fixture(scope="module")

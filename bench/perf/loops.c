@@ -177,7 +177,8 @@ static inline double spherical_energy(const consts *k, double x, double y, doubl
 DEFINE_KICK(linear, 0.0, 0.0)
 DEFINE_KICK(spherical, k->wx, k->wy)
 
-/* ---- schemes: one step (x, y, vx, vy) -> next, in place ---- */
+/* ---- schemes: one step (x, y, vx, vy) -> next, in place; rk4 and heun3 as increments, which the loop adds
+ * with compensated summation (integrators/explicit_rk.py make_increment, COMPENSATED_ADVANCE) ---- */
 
 #define DEFINE_RUNGE_KUTTA_STEPS(model)                                                                       \
     static inline void model##_explicit_euler_step(const consts *k, double h, double *x, double *y,          \
@@ -200,9 +201,9 @@ DEFINE_KICK(spherical, k->wx, k->wy)
         *vx = vxn;                                                                                            \
         *vy = vyn;                                                                                            \
     }                                                                                                         \
-    static inline void model##_rk4_step(const consts *k, double h, double *px, double *py, double *pvx,      \
-                                        double *pvy) {                                                       \
-        double x = *px, y = *py, vx = *pvx, vy = *pvy, half = 0.5 * h;                                        \
+    static inline void model##_rk4_increment(const consts *k, double h, double x, double y, double vx,       \
+                                             double vy, double *d) {                                         \
+        double half = 0.5 * h;                                                                                \
         double k1ax, k1ay, k2ax, k2ay, k3ax, k3ay, k4ax, k4ay;                                                \
         model##_acceleration(k, x, y, vx, vy, &k1ax, &k1ay);                                                  \
         double x2 = x + half * vx, y2 = y + half * vy, vx2 = vx + half * k1ax, vy2 = vy + half * k1ay;        \
@@ -212,15 +213,15 @@ DEFINE_KICK(spherical, k->wx, k->wy)
         double x4 = x + h * vx3, y4 = y + h * vy3, vx4 = vx + h * k3ax, vy4 = vy + h * k3ay;                  \
         model##_acceleration(k, x4, y4, vx4, vy4, &k4ax, &k4ay);                                              \
         double sixth = h / 6.0;                                                                               \
-        *px = x + sixth * (vx + 2.0 * vx2 + 2.0 * vx3 + vx4);                                                 \
-        *py = y + sixth * (vy + 2.0 * vy2 + 2.0 * vy3 + vy4);                                                 \
-        *pvx = vx + sixth * (k1ax + 2.0 * k2ax + 2.0 * k3ax + k4ax);                                          \
-        *pvy = vy + sixth * (k1ay + 2.0 * k2ay + 2.0 * k3ay + k4ay);                                          \
+        d[0] = sixth * (vx + 2.0 * vx2 + 2.0 * vx3 + vx4);                                                    \
+        d[1] = sixth * (vy + 2.0 * vy2 + 2.0 * vy3 + vy4);                                                    \
+        d[2] = sixth * (k1ax + 2.0 * k2ax + 2.0 * k3ax + k4ax);                                               \
+        d[3] = sixth * (k1ay + 2.0 * k2ay + 2.0 * k3ay + k4ay);                                               \
     }                                                                                                         \
     /* integrators/methods/heun3.py as integrators/explicit_rk.py generates it: rows (h/D)(integer sums) */    \
-    static inline void model##_heun3_step(const consts *k, double h, double *px, double *py, double *pvx,    \
-                                          double *pvy) {                                                     \
-        double x = *px, y = *py, vx = *pvx, vy = *pvy, third = h / 3.0, quarter = h / 4.0;                    \
+    static inline void model##_heun3_increment(const consts *k, double h, double x, double y, double vx,     \
+                                               double vy, double *d) {                                       \
+        double third = h / 3.0, quarter = h / 4.0;                                                            \
         double k1ax, k1ay, k2ax, k2ay, k3ax, k3ay;                                                            \
         model##_acceleration(k, x, y, vx, vy, &k1ax, &k1ay);                                                  \
         double x2 = x + third * vx, y2 = y + third * vy, vx2 = vx + third * k1ax, vy2 = vy + third * k1ay;    \
@@ -228,10 +229,10 @@ DEFINE_KICK(spherical, k->wx, k->wy)
         double x3 = x + third * (2.0 * vx2), y3 = y + third * (2.0 * vy2);                                    \
         double vx3 = vx + third * (2.0 * k2ax), vy3 = vy + third * (2.0 * k2ay);                              \
         model##_acceleration(k, x3, y3, vx3, vy3, &k3ax, &k3ay);                                              \
-        *px = x + quarter * (vx + 3.0 * vx3);                                                                 \
-        *py = y + quarter * (vy + 3.0 * vy3);                                                                 \
-        *pvx = vx + quarter * (k1ax + 3.0 * k3ax);                                                            \
-        *pvy = vy + quarter * (k1ay + 3.0 * k3ay);                                                            \
+        d[0] = quarter * (vx + 3.0 * vx3);                                                                    \
+        d[1] = quarter * (vy + 3.0 * vy3);                                                                    \
+        d[2] = quarter * (k1ax + 3.0 * k3ax);                                                                 \
+        d[3] = quarter * (k1ay + 3.0 * k3ay);                                                                 \
     }                                                                                                         \
     /* integrators/methods/nystrom4.py: the general Runge-Kutta-Nystrom method, stages at stage velocities */ \
     static inline void model##_nystrom4_step(const consts *k, double h, double *px, double *py, double *pvx, \
@@ -568,8 +569,9 @@ static void turning_point(double x0, double y0, double vx0, double vy0, double x
         compensated_add(vy, d[3], &c[3]);                                                                     \
     }
 #define PLAIN_ADVANCES(model)                                                                                 \
-    PLAIN_ADVANCE(model, explicit_euler) PLAIN_ADVANCE(model, symplectic_euler) PLAIN_ADVANCE(model, rk4)    \
-    PLAIN_ADVANCE(model, heun3) PLAIN_ADVANCE(model, nystrom4) PLAIN_ADVANCE(model, verlet)                  \
+    PLAIN_ADVANCE(model, explicit_euler) PLAIN_ADVANCE(model, symplectic_euler)                              \
+    COMPENSATED_ADVANCE(model, rk4) COMPENSATED_ADVANCE(model, heun3)                                        \
+    PLAIN_ADVANCE(model, nystrom4) PLAIN_ADVANCE(model, verlet)                                              \
     PLAIN_ADVANCE(model, yoshida4) PLAIN_ADVANCE(model, composition6) PLAIN_ADVANCE(model, boris)            \
     COMPENSATED_ADVANCE(model, implicit_midpoint) COMPENSATED_ADVANCE(model, gauss_legendre4)
 PLAIN_ADVANCES(linear)

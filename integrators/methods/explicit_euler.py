@@ -31,3 +31,6 @@ class ExplicitEuler(ExplicitRungeKutta):
     tableau: ClassVar[ButcherTableau] = TABLEAU
     stability_limit_kh: ClassVar[None] = None
     reference: ClassVar[str] = TABLEAU.reference
+    compensated_update: ClassVar[bool] = False
+    """Its step is so cheap that compensated summation cost 1.27× on the linear model (bench/PERF.md "Round-off");
+    and it is unstable at every step, its error growing far faster than round-off."""
