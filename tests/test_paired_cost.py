@@ -11,6 +11,7 @@ import io
 import subprocess
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
 from foucault_bench.bench.cli import main
@@ -53,8 +54,9 @@ def test_paired_workers_answer_one_time_per_side_and_cycle(tmp_path):
     matrix = tmp_path / "paired.toml"
     matrix.write_text(MATRIX, encoding="utf-8")
     identities, times = paired_times(matrix, [Side("a"), Side("b")], cycles=1, process_sets=2)
-    assert [(scene, integrator) for scene, integrator, _, _ in identities] == [("seed_2min", "rk4"),
-                                                                               ("seed_2min", "dopri5")]
+    assert identities["a"] == identities["b"]  # one code version: the run keys agree too
+    assert [(scene, integrator) for scene, integrator, *_ in identities["a"]] == [("seed_2min", "rk4"),
+                                                                                 ("seed_2min", "dopri5")]
     assert sorted(times) == [0, 1]
     for samples in times.values():
         assert sorted(samples) == ["a", "b"] and all(len(values) == 2 and min(values) > 0
@@ -71,19 +73,24 @@ def test_a_side_whose_code_is_missing_is_one_line(tmp_path):
 
 def test_the_gate_fails_the_planted_slowdown_and_passes_noise(repository, tmp_path):
     """Made-up paired times (the timing replaced): run 0 is 10 % slower in every pair, run 1 differs by ±1 %
-    alternately; only run 0 fails, and both checks name the run and its ratio."""
+    alternately; only run 0 fails, and both checks name the run and its ratio; run 0's setting is labelled as
+    its stored row has it (the step the loop took), run 1, without a row, by the matrix's setting."""
     before = [0.02 * (1 + 0.2 * (index % 3)) for index in range(10)]
     noise = [value * (1.01 if index % 2 else 0.99) for index, value in enumerate(before)]
-    identities = [["seed_2min", "rk4", 0.2, None], ["seed_2min", "dopri5", None, 1e-6]]
+    new = [["seed_2min", "rk4", 0.2, None, "key-rk4"], ["seed_2min", "dopri5", None, 1e-6, "key-dopri5"]]
+    identities = {"baseline": [run[:4] + ["old"] for run in new], "new": new}
+    frame = pd.DataFrame({"run_key": ["key-rk4"], "scene": ["seed_2min"], "scene_key": ["k"], "kh": [0.19],
+                          "tol": [None], "integrator": ["rk4"]})
 
-    def timer(sides: list[Side], matrix: Path):
+    def timer(sides: list[Side], matrix: Path, progress):
         assert (sides[0].source / "foucault_bench" / "f").is_file()  # the revision's checkout
         return identities, {0: {"baseline": before, "new": [value * 1.1 for value in before]},
                             1: {"baseline": before, "new": noise}}
 
     commit = resolved_revision(repository, "HEAD")
-    outcomes = paired_cost_outcomes("quick", repository, "HEAD", commit, first_number=4, timer=timer)
+    outcomes = paired_cost_outcomes("quick", frame, repository, "HEAD", commit, first_number=4, timer=timer)
     assert [(outcome.integrator, outcome.passed) for outcome in outcomes] == [("rk4", False), ("dopri5", True)]
+    assert [outcome.setting for outcome in outcomes] == ["kh=0.19", "tol=1e-06"]
     assert outcomes[0].measured == pytest.approx(1.1) and outcomes[0].bound.number == 4
     assert "×1.100" in outcomes[0].detail and "10 pairs" in outcomes[0].detail
 

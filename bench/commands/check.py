@@ -34,7 +34,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "accuracy column that differs fails unless the thresholds file declares it an "
                              "[[expected_change]]")
     parser.add_argument("--cost", action="store_true",
-                        help="with --baseline: also fail on a CPU-time slowdown beyond the noise of both runs")
+                        help="with --baseline: also fail on a CPU-time slowdown beyond the noise of both runs (costs "
+                             "measured at two different times: on a busy machine this over-reports, bench/PERF.md; "
+                             "--cost-paired does not)")
     parser.add_argument("--cost-paired", metavar="REV",
                         help="when running a matrix: time every run's solve again, in turn with the code of this git "
                              "revision of --repo (checked out in a temporary git worktree) in one session, and fail "
@@ -124,8 +126,11 @@ def main(args: argparse.Namespace) -> int:
     if paired_commit is not None:
         from foucault_bench.bench.gate.paired_cost_gate import paired_cost_outcomes
 
-        outcomes += paired_cost_outcomes(matrix_name, args.repo, args.cost_paired, paired_commit,
-                                         first_number=len(thresholds.bounds) + 3)
+        assert matrix_name is not None  # --cost-paired refuses --results: a matrix was run
+        outcomes += paired_cost_outcomes(
+            matrix_name, frame, args.repo, args.cost_paired, paired_commit, first_number=len(thresholds.bounds) + 3,
+            progress=(lambda line: None) if args.no_progress else (lambda line: print(f"paired: {line}",
+                                                                                      file=sys.stderr)))
     print(f"checking {thresholds.source} against {what}", file=sys.stderr)
     unbounded = sorted(set(frame["integrator"]) - {outcome.integrator for outcome in outcomes})
     if unbounded:

@@ -3,26 +3,27 @@
 Costs measured at different times differ by more than their repeats' scatter on a shared machine (bench/PERF.md
 "Cost changes across revisions": the adaptive drivers shift by 5-30 % between rounds while their repeats scatter
 by 10 %). Here each *side* (a code version: a source folder or the installed package, plus plug-in modules to
-import) gets its own worker process, started fresh for each run; for each run of a matrix every worker makes one
-untimed warm-up solve and then the workers take turns, one timed solve each per *cycle* (the side that starts a
-cycle rotates, so no side always runs first), ``cycles`` times. Only one worker computes at any moment and the
-solves of one cycle are adjacent in time, so whatever the machine does (a neighbour on the sibling vCPU, the
-load of other jobs) reaches the sides of a cycle alike; the ratio within each cycle is the comparison
-(``bench.history.changes.paired_cost_change``). A fresh process pair per run averages over what belongs to one
-process (code placement, memory layout) across the runs of a matrix.
+import) gets a worker process; for each run of a matrix every worker makes one untimed warm-up solve and then
+the workers take turns, one timed solve each per *cycle* (the side that starts a cycle rotates, so no side
+always runs first), ``cycles`` times. Only one worker computes at any moment and the solves of one cycle are
+adjacent in time, so whatever the machine does (a neighbour on the sibling vCPU, the load of other jobs)
+reaches the sides of a cycle alike; the ratio within each cycle is the comparison
+(``bench.history.changes.paired_cost_change``). The whole matrix is timed ``process_sets`` times, each time by
+fresh workers, so that what belongs to one process (code placement, memory layout) is averaged over
+(measured in bench/PERF.md: two same-code workers' ratio per set of processes was within ± 1.6 % in 18 of 20
+sets, the others at 0.94 and 0.97).
 
 A worker (``WORKER_CODE``, run as ``python -c``) imports the side's code (a source folder is put first on the
 import path with the installed package's finder removed, as ``bench.history.bisect`` does), loads the matrix with
-that code's ``load_matrix``, and answers one line per command on stdin: ``warm I`` (the I-th run's solve,
-untimed; it answers its status) and ``time I`` (one solve; it answers the CPU time of the worker thread,
-``time.thread_time``, as ``repr`` of a float). Its native thread pools are capped at one thread
-(``bench.run.timing.limit_threads``).
+that code's ``load_matrix``, prints what its runs are (one JSON line: scene, integrator, kh, tol and run key each)
+and answers one line per command on stdin: ``warm I`` (the I-th run's solve, untimed; it answers its status) and
+``time I`` (one solve; it answers the CPU time of the worker thread, ``time.thread_time``, as ``repr`` of a float).
+Its native thread pools are capped at one thread (``bench.run.timing.limit_threads``).
 """
 
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 import tempfile
@@ -56,7 +57,7 @@ def solve(index):
         integrator, problem = get_integrator(spec.integrator), spec.scene.problem()
         solves[index] = lambda: integrator.solve(problem, step_s=spec.step_s, tol=spec.tol, monitor=False)
     return solves[index]()
-print(json.dumps([[spec.scene.name, spec.integrator, spec.kh, spec.tol] for spec in runs]), flush=True)
+print(json.dumps([[spec.scene.name, spec.integrator, spec.kh, spec.tol, spec.run_key] for spec in runs]), flush=True)
 for line in sys.stdin:
     command, index = line.split()
     if command == "warm":
@@ -81,15 +82,15 @@ class Side:
 class TimingWorker:
     """One side's worker process for one run (module docstring); ``close`` ends it."""
 
-    def __init__(self, side: Side, matrix_path: Path, environment: dict[str, str] | None = None):
+    def __init__(self, side: Side, matrix_path: Path):
         self.side = side
         self.errors = tempfile.TemporaryFile(mode="w+")  # a file, not a pipe: a chatty worker cannot block on it
         self.process = subprocess.Popen(
             [sys.executable, "-c", WORKER_CODE, str(side.source or ""), str(matrix_path), ",".join(side.plugins)],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.errors, text=True,
-            env=environment or dict(os.environ))
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.errors, text=True)
         self.runs: list[list] = json.loads(self._answer())
-        """What each run of the matrix is, as this side's code reads it: scene, integrator, kh, tol."""
+        """What each run of the matrix is, as this side's code reads it: scene, integrator, kh, tol, and the
+        run key (which also hashes the code version, so it differs between code versions)."""
 
     def _answer(self) -> str:
         assert self.process.stdout is not None
@@ -125,25 +126,26 @@ def cycle_order(sides: int, cycle: int) -> list[int]:
 
 
 def paired_times(matrix_path: Path, sides: Sequence[Side], *, cycles: int, process_sets: int = 1,
-                 runs: Sequence[int] | None = None, environment: dict[str, str] | None = None,
-                 progress: Callable[[str], None] = lambda line: None) -> dict[int, dict[str, list[float]]]:
-    """Run index → side label → CPU times (s) of its ``cycles × process_sets`` timed solves, in cycle order
-    (module docstring): ``process_sets`` times a fresh worker per side, each making ``cycles`` cycles of every
-    run (``runs``: their indices in the matrix; default all). Runs whose warm-up is not ``ok`` on every side are left out. ``InputError`` when a side's worker cannot load
-    its code or the matrix, or the sides' matrices differ in length."""
+                 progress: Callable[[str], None] = lambda line: None
+                 ) -> tuple[dict[str, list[list]], dict[int, dict[str, list[float]]]]:
+    """Side label → what each run of the matrix is (``TimingWorker.runs``), and run index → side label → CPU
+    times (s) of its ``cycles × process_sets`` timed solves in cycle order (module docstring): ``process_sets``
+    times a fresh worker per side, each making ``cycles`` cycles of every run. Runs whose warm-up is not ``ok``
+    on every side are left out. ``progress`` gets a line per run timed. ``InputError`` when a side's worker
+    cannot load its code or the matrix, or the sides read other runs from it (scene, integrator, setting)."""
     if len(sides) < 2 or cycles < 1 or process_sets < 1:
         raise InputError("paired timing needs two sides or more, at least one cycle and one process set")
     times: dict[int, dict[str, list[float]]] = {}
-    identities: list[list] = []
+    identities: dict[str, list[list]] = {}
     failed: set[int] = set()
     for process_set in range(process_sets):
-        workers = [TimingWorker(side, matrix_path, environment) for side in sides]
+        workers = [TimingWorker(side, matrix_path) for side in sides]
         try:
-            if any(worker.runs != workers[0].runs for worker in workers):
+            if any([run[:4] for run in worker.runs] != [run[:4] for run in workers[0].runs] for worker in workers):
                 raise InputError("paired timing: the sides' code reads other runs from the matrix "
                                  f"({', '.join(f'{worker.side.label}: {len(worker.runs)}' for worker in workers)})")
-            identities = workers[0].runs
-            for index in (range(len(workers[0].runs)) if runs is None else runs):
+            identities = {worker.side.label: worker.runs for worker in workers}
+            for index in range(len(workers[0].runs)):
                 if index in failed or not all(worker.ask("warm", index) == "ok" for worker in workers):
                     failed.add(index)
                     times.pop(index, None)

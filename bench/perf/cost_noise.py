@@ -172,7 +172,9 @@ def paired_counts(rounds: list[dict], integrators: dict[str, str]) -> dict:
     """The paired comparisons of every round (module docstring, ``--paired``): same-code pairs compared and
     flagged, rk4 pairs compared and found slower, and the ratios of each kind. ``integrators``: run index →
     integrator."""
-    counts = dict(same=0, flagged=0, rk4=0, found=0, same_ratios=[], rk4_ratios=[], flagged_runs=[])
+    counts: dict[str, int] = dict(same=0, flagged=0, rk4=0, found=0)
+    ratios: dict[str, list[float]] = dict(same_ratios=[], rk4_ratios=[])
+    flagged_runs: list[str] = []
     for round_ in rounds:
         for index, samples in round_["times"].items():
             if statistics.median(samples["same1"]) < MIN_COST_S:
@@ -184,14 +186,14 @@ def paired_counts(rounds: list[dict], integrators: dict[str, str]) -> dict:
                 if slowed:
                     counts["rk4"] += 1
                     counts["found"] += comparison.changed and comparison.ratio > 1
-                    counts["rk4_ratios"].append(comparison.ratio)
+                    ratios["rk4_ratios"].append(comparison.ratio)
                 else:
                     counts["same"] += 1
                     counts["flagged"] += comparison.changed
-                    counts["same_ratios"].append(comparison.ratio)
+                    ratios["same_ratios"].append(comparison.ratio)
                     if comparison.changed:
-                        counts["flagged_runs"].append(f"{integrators[index]} {before}/{after} ×{comparison.ratio:.3f}")
-    return counts
+                        flagged_runs.append(f"{integrators[index]} {before}/{after} ×{comparison.ratio:.3f}")
+    return dict(counts, **ratios, flagged_runs=flagged_runs)
 
 
 def paired_report(rounds: list[dict]) -> str:
@@ -206,8 +208,9 @@ def paired_report(rounds: list[dict]) -> str:
     lines += [f"| {number} | {r['cpu_s']:.0f} | {r['load'][0]:.1f} → {r['load'][1]:.1f} |"
               for number, r in enumerate(rounds, 1)]
     counts = paired_counts(rounds, integrators)
+    flagged_runs = ", ".join(counts["flagged_runs"]) or "none"
     lines += ["", f"Same-code pairs: ratios {_range(counts['same_ratios'])}; slowed rk4: ratios "
-              f"{_range(counts['rk4_ratios'])}. Flagged same-code pairs: {', '.join(counts['flagged_runs']) or 'none'}.",
+              f"{_range(counts['rk4_ratios'])}. Flagged same-code pairs: {flagged_runs}.",
               "", f"False alarms: {counts['flagged']} of {counts['same']} "
               f"({100 * counts['flagged'] / max(counts['same'], 1):.1f} %, target ≤ 5 %). Slowdown found: "
               f"{counts['found']} of {counts['rk4']} ({100 * counts['found'] / max(counts['rk4'], 1):.1f} %, "
