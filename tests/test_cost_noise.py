@@ -95,3 +95,12 @@ def test_the_paired_measurement_counts_same_code_pairs_and_slowed_rk4_by_the_pai
     assert (counts["rk4"], counts["found"]) == (2, 2)
     assert (counts["same"], counts["flagged"]) == (7, 2)
     assert counts["rk4_ratios"] == pytest.approx([1.1, 1.1])
+
+
+def test_a_paired_measurement_with_too_few_pairs_is_refused_before_timing(capsys):
+    from foucault_bench.bench.perf.cost_noise import main
+
+    with pytest.raises(SystemExit) as raised:
+        main(["--paired", "--cycles", "3", "--process-sets", "2"])
+    error = capsys.readouterr().err.strip().splitlines()
+    assert raised.value.code == 2 and "--cycles × --process-sets >= 8" in error[-1]

@@ -221,7 +221,8 @@ def paired_report(rounds: list[dict]) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m foucault_bench.bench.perf.cost_noise", description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=Path, help="folder for the databases (default: a temporary one)")
-    parser.add_argument("--rounds", type=int, default=2, help="same-code rounds (at least 2; default 2)")
+    parser.add_argument("--rounds", type=int, default=2,
+                        help="same-code rounds, or with --paired sessions (at least 2; default 2)")
     parser.add_argument("--jobs", type=int, default=2, help="worker processes per round (default 2)")
     parser.add_argument("--compare", type=Path, metavar="DIR", help="no new rounds: compare those of an earlier --out DIR")
     parser.add_argument("--paired", action="store_true",
@@ -233,6 +234,8 @@ def main(argv: list[str] | None = None) -> int:
     arguments = parser.parse_args(argv)
     if arguments.rounds < 2 or arguments.jobs < 1:
         parser.error("need --rounds >= 2 and --jobs >= 1")
+    if arguments.paired and arguments.cycles * arguments.process_sets < MIN_PAIRS:
+        parser.error(f"--paired needs --cycles × --process-sets >= {MIN_PAIRS} (the signed-rank test's pairs)")
     if arguments.paired or (arguments.compare is not None and (arguments.compare / PAIRED_FILE).is_file()):
         return paired_main(arguments)
     if arguments.compare is not None:
@@ -258,8 +261,6 @@ def paired_main(arguments: argparse.Namespace) -> int:
     if arguments.compare is not None:
         print(paired_report(json.loads((arguments.compare / PAIRED_FILE).read_text())))
         return 0
-    if arguments.cycles * arguments.process_sets < MIN_PAIRS:
-        raise SystemExit(f"--paired needs --cycles × --process-sets >= {MIN_PAIRS} (the signed-rank test's pairs)")
     with tempfile.TemporaryDirectory() as temporary:
         directory = arguments.out or Path(temporary)
         directory.mkdir(parents=True, exist_ok=True)
