@@ -127,10 +127,14 @@ def main(args: argparse.Namespace) -> int:
         from foucault_bench.bench.gate.paired_cost_gate import paired_cost_outcomes
 
         assert matrix_name is not None  # --cost-paired refuses --results: a matrix was run
-        outcomes += paired_cost_outcomes(
-            matrix_name, frame, args.repo, args.cost_paired, paired_commit, first_number=len(thresholds.bounds) + 3,
-            progress=(lambda line: None) if args.no_progress else (lambda line: print(f"paired: {line}",
-                                                                                      file=sys.stderr)))
+        first_number = len(thresholds.bounds) + (3 if baseline is not None else 1)  # after --baseline's two
+
+        def progress(line: str) -> None:
+            if not args.no_progress:
+                print(f"paired: {line}", file=sys.stderr)
+
+        outcomes += paired_cost_outcomes(matrix_name, frame, args.repo, args.cost_paired, paired_commit,
+                                         first_number=first_number, progress=progress)
     print(f"checking {thresholds.source} against {what}", file=sys.stderr)
     unbounded = sorted(set(frame["integrator"]) - {outcome.integrator for outcome in outcomes})
     if unbounded:
