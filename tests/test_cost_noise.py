@@ -13,7 +13,7 @@ import math
 import pandas as pd
 import pytest
 
-from foucault_bench.bench.perf.cost_noise import MARKER, compare
+from foucault_bench.bench.perf.cost_noise import MARKER, compare, paired_counts
 from foucault_bench.bench.perf.protocol_replay import replay, replayed_count
 from foucault_bench.bench.run.timing import TimingPolicy
 
@@ -80,3 +80,27 @@ def test_the_slowed_plugin_marks_its_rows_and_computes_the_same_numbers():
         assert slowed.y.tobytes() == plain.y.tobytes() and MARKER in slowed.message
     finally:
         REGISTRY["rk4"] = original
+
+
+def test_the_paired_measurement_counts_same_code_pairs_and_slowed_rk4_by_the_paired_rule():
+    """One session, made-up times: an rk4 run 10 % slower on the slowed side (2 detections: same1 and same2
+    against it, and 1 same-code pair), a verlet run equal on all sides (3 same-code pairs), a dop853 run whose
+    same2 side is 20 % dearer (flagged in the 2 of its 3 pairs that include same2) and a 5-ms run left out."""
+    base = [0.02 * (1 + 0.1 * (index % 4)) for index in range(10)]
+    times = {"0": dict(same1=base, same2=base, slowed=[value * 1.1 for value in base]),
+             "12": dict(same1=base, same2=base, slowed=base),
+             "28": dict(same1=base, same2=[value * 1.2 for value in base], slowed=base),
+             "3": dict(same1=[0.005] * 10, same2=[0.005] * 10, slowed=[0.0055] * 10)}
+    counts = paired_counts([dict(times=times)], {"0": "rk4", "3": "rk4", "12": "verlet", "28": "dop853"})
+    assert (counts["rk4"], counts["found"]) == (2, 2)
+    assert (counts["same"], counts["flagged"]) == (7, 2)
+    assert counts["rk4_ratios"] == pytest.approx([1.1, 1.1])
+
+
+def test_a_paired_measurement_with_too_few_pairs_is_refused_before_timing(capsys):
+    from foucault_bench.bench.perf.cost_noise import main
+
+    with pytest.raises(SystemExit) as raised:
+        main(["--paired", "--cycles", "3", "--process-sets", "2"])
+    error = capsys.readouterr().err.strip().splitlines()
+    assert raised.value.code == 2 and "--cycles × --process-sets >= 8" in error[-1]

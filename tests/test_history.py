@@ -24,8 +24,9 @@ import pytest
 
 from foucault_bench.bench.cli import main
 from foucault_bench.bench.history.bisect import Configuration, bisect
+from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.history.changes import (
-    COST_MIN_EFFECT, CostComparison, cost_change, history_changes, lined_up,
+    COST_MIN_EFFECT, MIN_PAIRS, CostComparison, cost_change, history_changes, lined_up, paired_cost_change,
 )
 from foucault_bench.bench.history.load import load_history
 from foucault_bench.bench.history.revisions import ordered_revisions
@@ -208,6 +209,58 @@ def test_a_cost_change_must_exceed_both_runs_noise_and_calibration_applies_betwe
     faster_machine = cost_change(row(steady), row([value / 2 for value in steady], calibration_s=0.5, cpu="cpu B"))
     assert faster_machine.ratio == pytest.approx(1.0) and not faster_machine.changed
     assert faster_machine.method.endswith("calibrated")
+
+
+def _session(rng: np.random.Generator, pairs: int) -> tuple[list[float], list[float]]:
+    """Made-up paired times: each cycle's machine factor (log-normal, σ 20 %, as the adaptive drivers moved
+    between rounds) multiplies both sides alike; each solve has its own 2 % scatter."""
+    machine = np.exp(0.2 * rng.standard_normal(pairs))
+    return ([float(value) for value in 0.05 * machine * np.exp(0.02 * rng.standard_normal(pairs))],
+            [float(value) for value in 0.05 * machine * np.exp(0.02 * rng.standard_normal(pairs))])
+
+
+def test_the_paired_rule_finds_a_planted_slowdown_and_passes_noise():
+    """200 seeded sessions of 10 pairs whose machine factor moves by 20 % between cycles: with the same code on
+    both sides at most 1 % is flagged (the effect floor, 5 %, is 2.5 σ of one pair's log-ratio, and the median of
+    10 pairs narrows it further); with the second side 10 % slower every session is found slower. The unpaired
+    rule on the same numbers (the repeats of each side as a run) finds under a tenth of the slowdowns: the
+    machine's scatter hides them."""
+    rng = np.random.default_rng(20261202)
+    flagged = found = unpaired_found = 0
+    for _ in range(200):
+        before, after = _session(rng, 10)
+        flagged += paired_cost_change(before, after).changed
+        slower = [value * 1.1 for value in after]
+        comparison = paired_cost_change(before, slower)
+        found += comparison.changed and comparison.ratio > 1
+        unpaired = cost_change({"cpu_time_repeats_s": json.dumps(before), "calibration_cpu_s": 1.0},
+                               {"cpu_time_repeats_s": json.dumps(slower), "calibration_cpu_s": 1.0})
+        unpaired_found += unpaired is not None and unpaired.changed
+    assert flagged <= 2 and found == 200 and unpaired_found < 20
+
+
+def test_the_paired_rule_reports_the_median_ratio_and_the_effect_floor():
+    """Every pair 3 % slower: significant (p = 2/2¹⁰) but under the 5 % floor, so not a change; 8 % faster: a
+    change with ratio 1/1.08 exactly; identical samples: ratio 1 and p = 1."""
+    before = [0.01 * (1 + 0.1 * index) for index in range(10)]
+    small = paired_cost_change(before, [value * (1 + COST_MIN_EFFECT - 0.02) for value in before])
+    assert not small.changed and small.p_value < 0.01 and small.method.startswith("paired")
+    faster = paired_cost_change(before, [value / 1.08 for value in before])
+    assert faster.changed and faster.ratio == pytest.approx(1 / 1.08)
+    same = paired_cost_change(before, before)
+    assert same.ratio == 1.0 and same.p_value == 1.0 and not same.changed
+
+
+@pytest.mark.parametrize("before, after, message", [
+    ([0.01] * MIN_PAIRS, [0.01] * (MIN_PAIRS + 1), "pairs need as many"),
+    ([0.01] * (MIN_PAIRS - 1), [0.01] * (MIN_PAIRS - 1), f"at least {MIN_PAIRS}"),
+    ([0.01] * (MIN_PAIRS - 1) + [0.0], [0.01] * MIN_PAIRS, "positive finite"),
+    ([0.01] * (MIN_PAIRS - 1) + [math.nan], [0.01] * MIN_PAIRS, "positive finite"),
+])
+def test_the_paired_rule_refuses_bad_samples_in_one_line(before, after, message):
+    with pytest.raises(InputError) as raised:
+        paired_cost_change(before, after)
+    assert len(raised.value.problems) == 1 and message in raised.value.problems[0]
 
 
 def test_revisions_fall_back_to_time_without_the_repository(history_db, tmp_path):

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from foucault_bench.bench.commands import options
 from foucault_bench.bench.errors import InputError
@@ -33,7 +34,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "accuracy column that differs fails unless the thresholds file declares it an "
                              "[[expected_change]]")
     parser.add_argument("--cost", action="store_true",
-                        help="with --baseline: also fail on a CPU-time slowdown beyond the noise of both runs")
+                        help="with --baseline: also fail on a CPU-time slowdown beyond the noise of both runs (costs "
+                             "measured at two different times: on a busy machine this over-reports, bench/PERF.md; "
+                             "--cost-paired does not)")
+    parser.add_argument("--cost-paired", metavar="REV",
+                        help="when running a matrix: time every run's solve again, in turn with the code of this git "
+                             "revision of --repo (checked out in a temporary git worktree) in one session, and fail "
+                             "on a CPU-time slowdown beyond the paired noise; unlike --baseline --cost it stays "
+                             "within its noise target on a busy machine (bench/PERF.md)")
+    parser.add_argument("--repo", type=Path, default=Path("."), metavar="DIR",
+                        help="with --cost-paired: the git repository of this code (default: the current folder)")
     parser.add_argument("--db", metavar="FILE",
                         help="when running a matrix: keep its results in this database (default: a temporary one)")
     parser.add_argument("--jobs", type=int, default=None, help="worker processes when running a matrix "
@@ -68,6 +78,14 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("--db is where a fresh matrix run is kept; with --results give the database there")
     if args.cost and not args.baseline:
         raise InputError("--cost compares costs with a baseline: give --baseline DB")
+    if args.cost_paired and args.results:
+        raise InputError("--cost-paired times the matrix's solves beside the revision's code: give --matrix (or "
+                         "the thresholds file's matrix), not --results")
+    paired_commit = None
+    if args.cost_paired:
+        from foucault_bench.bench.gate.paired_cost_gate import resolved_revision
+
+        paired_commit = resolved_revision(args.repo, args.cost_paired)
     if args.allow_unfinished and not args.results:
         raise InputError("--allow-unfinished is for a stored matrix run: give it with --results")
     matrix_file = None if args.results else _user_file(args.matrix or thresholds.matrix_to_run())
@@ -105,6 +123,18 @@ def main(args: argparse.Namespace) -> int:
         baseline_frame, baseline_what = baseline
         outcomes += baseline_outcomes(thresholds, frame, baseline_frame, cost=args.cost,
                                       what=f"the baseline {baseline_what}")
+    if paired_commit is not None:
+        from foucault_bench.bench.gate.paired_cost_gate import paired_cost_outcomes
+
+        assert matrix_name is not None  # --cost-paired refuses --results: a matrix was run
+        first_number = len(thresholds.bounds) + (3 if baseline is not None else 1)  # after --baseline's two
+
+        def progress(line: str) -> None:
+            if not args.no_progress:
+                print(f"paired: {line}", file=sys.stderr)
+
+        outcomes += paired_cost_outcomes(matrix_name, frame, args.repo, args.cost_paired, paired_commit,
+                                         first_number=first_number, progress=progress)
     print(f"checking {thresholds.source} against {what}", file=sys.stderr)
     unbounded = sorted(set(frame["integrator"]) - {outcome.integrator for outcome in outcomes})
     if unbounded:

@@ -4,8 +4,11 @@ Each run present in both (matched as ``bench.history.changes`` lines runs up) gi
 check: it fails when an accuracy column differs (bit for bit, or beyond the cross-machine tolerance) unless an
 ``[[expected_change]]`` of the thresholds file selects that row and column. With ``cost`` each run with stored
 timed repeats on both sides also gives a ``baseline_cost`` check: it fails on a slowdown beyond the noise of both
-runs (``bench.history.changes.cost_change``). A scene with other physics on the two sides is bad input: its runs
-are different scenes.
+runs (``bench.history.changes.cost_change``). Those costs were measured at two different times: on a busy
+shared machine they differ by more than either run's repeats show, and this check then fails about a third of
+unchanged runs (bench/PERF.md "Cost changes across revisions"); ``check --cost-paired``
+(``bench.gate.paired_cost_gate``) times both code versions in one session instead and meets the noise targets
+there. A scene with other physics on the two sides is bad input: its runs are different scenes.
 """
 
 from __future__ import annotations

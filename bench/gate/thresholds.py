@@ -68,8 +68,10 @@ OTHER_KEYS = ("column", "relative_to", "basis")
 BOUND_KEYS = SELECTION_KEYS + BOUND_KINDS + OTHER_KEYS
 STATUSES = ("ok", "diverged", "failed")
 BASELINE_KINDS = {"baseline_accuracy": "accuracy as in the baseline",
-                  "baseline_cost": "cpu_time_s not above the baseline's beyond noise"}
-"""The checks ``check --baseline`` adds (``bench.gate.baseline``): not written in a file, numbered after its bounds."""
+                  "baseline_cost": "cpu_time_s not above the baseline's beyond noise",
+                  "paired_cost": "cpu_time_s not above the revision's, timed in turn"}
+"""The checks ``check --baseline`` and ``check --cost-paired`` add (``bench.gate.baseline``,
+``bench.gate.paired_cost_gate``): not written in a file, numbered after its bounds."""
 
 ERROR_COLUMNS: tuple[str, ...] = tuple(name for name in VERDICT_COLUMNS if name != "energy_drift_per_s")
 """Non-negative error columns: the ones a convergence order can be fitted to."""

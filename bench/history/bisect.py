@@ -12,6 +12,7 @@ its neighbours are tried, and the answer then says which commits were skipped.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import subprocess
@@ -19,7 +20,7 @@ import sys
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterator
 
 from foucault_bench.bench.errors import InputError
 
@@ -90,13 +91,13 @@ sys.exit(cli.main(["run", "--matrix", {matrix!r}, "--db", {db!r}, "--jobs", "1",
 """
 
 
-def run_at(repository: Path, commit: str, configuration: Configuration, scratch: Path) -> object:
-    """The verdict of ``configuration`` at ``commit`` (a float, or the run's status when it is not ok);
-    ``RuntimeError`` with the reason when the run cannot be made there."""
-    from foucault_bench.bench.run.store import ResultsStore
-
-    folder = scratch / commit[:12]
+@contextlib.contextmanager
+def checked_out(repository: Path, commit: str, folder: Path) -> Iterator[Path]:
+    """``commit`` of ``repository`` as a detached git worktree under ``folder`` (an empty folder to create),
+    yielded as a folder holding the package ``foucault_bench`` (to put first on an interpreter's import path);
+    the worktree is removed afterwards. ``RuntimeError`` with the reason when git cannot check it out."""
     tree = folder / "tree"
+    folder.mkdir(parents=True, exist_ok=True)
     added = _git(repository, "worktree", "add", "--detach", str(tree), commit)
     if added.returncode != 0:
         raise RuntimeError(f"git worktree add failed: {added.stderr.strip().splitlines()[-1:]}")
@@ -104,12 +105,26 @@ def run_at(repository: Path, commit: str, configuration: Configuration, scratch:
         package = folder / "path"
         package.mkdir()
         (package / "foucault_bench").symlink_to(tree, target_is_directory=True)
-        matrix, db = folder / "bisect.toml", folder / "bisect.sqlite"
-        matrix.write_text(configuration.matrix_toml(), encoding="utf-8")
-        code = _RUNNER.format(path=str(package), root=str(package / "foucault_bench"), matrix=str(matrix), db=str(db))
-        environment = {**os.environ, "NUMBA_CACHE_DIR": str(folder / "numba-cache")}
-        done = subprocess.run([sys.executable, "-c", code], cwd=folder, capture_output=True, text=True,
-                              timeout=BISECT_TIMEOUT_S, env=environment)
+        yield package
+    finally:
+        _git(repository, "worktree", "remove", "--force", str(tree))
+
+
+def run_at(repository: Path, commit: str, configuration: Configuration, scratch: Path) -> object:
+    """The verdict of ``configuration`` at ``commit`` (a float, or the run's status when it is not ok);
+    ``RuntimeError`` with the reason when the run cannot be made there."""
+    from foucault_bench.bench.run.store import ResultsStore
+
+    folder = scratch / commit[:12]
+    try:
+        with checked_out(repository, commit, folder) as package:
+            matrix, db = folder / "bisect.toml", folder / "bisect.sqlite"
+            matrix.write_text(configuration.matrix_toml(), encoding="utf-8")
+            code = _RUNNER.format(path=str(package), root=str(package / "foucault_bench"), matrix=str(matrix),
+                                  db=str(db))
+            environment = {**os.environ, "NUMBA_CACHE_DIR": str(folder / "numba-cache")}
+            done = subprocess.run([sys.executable, "-c", code], cwd=folder, capture_output=True, text=True,
+                                  timeout=BISECT_TIMEOUT_S, env=environment)
         if done.returncode != 0:
             lines = (done.stderr or done.stdout).strip().splitlines()
             raise RuntimeError(lines[-1] if lines else f"exit status {done.returncode}")
@@ -125,7 +140,6 @@ def run_at(repository: Path, commit: str, configuration: Configuration, scratch:
         value = row[configuration.verdict]
         return float(value) if isinstance(value, (int, float)) else value
     finally:
-        _git(repository, "worktree", "remove", "--force", str(tree))
         shutil.rmtree(folder, ignore_errors=True)
 
 

@@ -21,7 +21,14 @@ integrator, the exact setting), whatever the code version that made them.
   sides have ``MIN_REPEATS_FOR_TEST`` repeats, a two-sided Mann–Whitney U test (as asv's ``compare`` uses;
   scipy.stats.mannwhitneyu) at ``COST_SIGNIFICANCE``. Rows without stored repeats (an older database) have no
   cost comparison. Its false-alarm and detection rates on a busy machine are measured by
-  ``bench.perf.cost_noise`` (bench/PERF.md).
+  ``bench.perf.cost_noise`` (bench/PERF.md): on a busy shared machine two runs measured at different times
+  differ by more than this rule allows for (the adaptive drivers by 5-30 %), so it over-reports there.
+* **Paired cost** (``paired_cost_change``): the two code versions' solves alternated in one session
+  (``bench.history.paired_cost``), one timed solve of each per cycle. The ratio is the exponential of the
+  median of the per-cycle log-ratios after/before; a change needs that ratio beyond ``1 ± COST_MIN_EFFECT``
+  and a two-sided Wilcoxon signed-rank test of the log-ratios against 0 (scipy.stats.wilcoxon) at
+  ``COST_SIGNIFICANCE``, with at least ``MIN_PAIRS`` pairs. What the machine does between cycles cancels in
+  each ratio; its false-alarm and detection rates are measured by ``bench.perf.cost_noise --paired``.
 """
 
 from __future__ import annotations
@@ -35,6 +42,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.history.revisions import Revision
 from foucault_bench.bench.run.compare import DETERMINISTIC_COLUMNS, run_identity
 from foucault_bench.bench.schema import setting_label
@@ -49,6 +57,8 @@ COST_MIN_EFFECT = 0.05
 COST_SIGNIFICANCE = 0.01
 MIN_REPEATS_FOR_TEST = 5
 """Fewest repeats per side for the rank test: with 5 and 5 the smallest two-sided p is 2/252 ≈ 0.008 < 0.01."""
+MIN_PAIRS = 8
+"""Fewest pairs for the signed-rank test: with 8 pairs the smallest two-sided p is 2/2⁸ ≈ 0.008 < 0.01."""
 MIN_COST_S = 0.01
 """Runs faster than 10 ms are compared too, but the noise figures of bench/PERF.md are stated for runs ≥ 10 ms."""
 
@@ -172,6 +182,26 @@ def cost_change(before: Mapping[str, Any], after: Mapping[str, Any]) -> CostComp
         return CostComparison(ratio, large and p_value < COST_SIGNIFICANCE,
                               f"beyond both intervals, Mann-Whitney U, {suffix}", p_value)
     return CostComparison(ratio, large, f"beyond both intervals, {suffix}")
+
+
+def paired_cost_change(before_s: Sequence[float], after_s: Sequence[float]) -> CostComparison:
+    """Whether the CPU time changed between paired solves (module docstring, "Paired cost"): ``before_s[i]``
+    and ``after_s[i]`` are the two versions' times (s) in cycle i. ``InputError`` for samples of different
+    lengths, fewer than ``MIN_PAIRS`` pairs, or a time that is not a positive finite number."""
+    from scipy.stats import wilcoxon
+
+    if len(before_s) != len(after_s):
+        raise InputError(f"paired costs: {len(before_s)} times before and {len(after_s)} after; pairs need as many")
+    if len(before_s) < MIN_PAIRS:
+        raise InputError(f"paired costs: {len(before_s)} pairs, the signed-rank test needs at least {MIN_PAIRS}")
+    a, b = np.asarray(before_s, dtype=float), np.asarray(after_s, dtype=float)
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b)) and np.all(a > 0) and np.all(b > 0)):
+        raise InputError("paired costs: every time must be a positive finite number of seconds")
+    log_ratios = np.log(b / a)
+    ratio = float(np.exp(np.median(log_ratios)))
+    p_value = 1.0 if not np.any(log_ratios) else float(wilcoxon(log_ratios, alternative="two-sided").pvalue)
+    large = abs(math.log(ratio)) > math.log1p(COST_MIN_EFFECT)
+    return CostComparison(ratio, large and p_value < COST_SIGNIFICANCE, "paired, Wilcoxon signed-rank", p_value)
 
 
 def _cross_machine(before: Mapping[str, Any], after: Mapping[str, Any]) -> bool:

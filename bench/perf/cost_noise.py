@@ -2,6 +2,7 @@
 
     python -m foucault_bench.bench.perf.cost_noise [--out DIR] [--rounds N] [--jobs J]
     python -m foucault_bench.bench.perf.cost_noise --compare DIR   # compare the rounds stored in DIR again
+    python -m foucault_bench.bench.perf.cost_noise --paired [--out DIR] [--rounds N] [--cycles C] [--process-sets P]
 
 Runs a small noise matrix (``NOISE_MATRIX``: fixed-step and adaptive integrators on the 3 m pendulum for two
 hours, runs of 10 ms to 0.5 s) ``rounds`` times with the same code and, between them, once more with rk4 slowed
@@ -18,6 +19,15 @@ through the ``foucault-bench run`` command, as a user runs it. It then compares,
 The other integrators' code is the same in the slowed round: their runs there count as same-code pairs too.
 It prints a Markdown table with the load average before and after each round (``os.getloadavg``), the ratios
 the rule compares and those of the calibrated medians beside them (what the calibration would remove).
+
+``--paired`` measures the paired rule instead (``bench.history.paired_cost``,
+``bench.history.changes.paired_cost_change``): in each of ``rounds`` sessions three workers time the noise
+matrix's solves in turn, two with the same code (``same1``, ``same2``) and one with the slowed rk4 (``slowed``;
+the plug-in is imported by that worker itself, which ends with an error if it cannot), ``cycles`` cycles per
+run in each of ``process_sets`` sets of fresh workers. Same-code pairs: same1 against same2 on every run, and
+each of them against slowed on every run but rk4's; detection: each against slowed on rk4's runs. The runs
+counted are those whose same1 median is ≥ ``MIN_COST_S``. The times are kept in ``DIR/paired.json``
+(``--compare DIR`` reports them again).
 """
 
 from __future__ import annotations
@@ -37,7 +47,8 @@ from pathlib import Path
 import pandas as pd
 
 from foucault_bench.bench.atomic import write_text_file
-from foucault_bench.bench.history.changes import MIN_COST_S, cost_change
+from foucault_bench.bench.history.changes import MIN_COST_S, MIN_PAIRS, cost_change, paired_cost_change
+from foucault_bench.bench.history.paired_cost import Side, paired_times
 from foucault_bench.bench.run.compare import run_identity
 from foucault_bench.bench.run.store import ResultsStore
 
@@ -45,6 +56,8 @@ SLOWED_PLUGIN = "foucault_bench.bench.perf.slowed_rk4"
 MARKER = "slowed by 10 % (bench.perf.slowed_rk4)"
 """What the plug-in appends to its runs' messages (defined here: importing the plug-in replaces rk4)."""
 ROUNDS_FILE = "rounds.json"
+PAIRED_FILE = "paired.json"
+PAIRED_SIDES = (Side("same1"), Side("same2"), Side("slowed", plugins=(SLOWED_PLUGIN,)))
 NOISE_MATRIX = textwrap.dedent("""\
     name = "cost-noise"
     description = "runs of 10 ms to 0.5 s for the cost-change rule's noise (bench.perf.cost_noise)"
@@ -139,15 +152,92 @@ def report(rounds: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def paired_round(directory: Path, *, cycles: int, process_sets: int) -> dict:
+    """One session of paired timing of the noise matrix (module docstring, ``--paired``): per run index, each
+    side's CPU times; the load around it and the session's CPU time (its workers' user + system)."""
+    matrix_path = directory / "paired.toml"
+    matrix_path.write_text(NOISE_MATRIX)
+    load_before, cpu_before = os.getloadavg()[0], _children_cpu_s()
+    _, times = paired_times(matrix_path, PAIRED_SIDES, cycles=cycles, process_sets=process_sets)
+    return dict(times={str(index): samples for index, samples in times.items()},
+                load=(load_before, os.getloadavg()[0]), cpu_s=_children_cpu_s() - cpu_before)
+
+
+def _children_cpu_s() -> float:
+    usage = os.times()
+    return usage.children_user + usage.children_system
+
+
+def paired_counts(rounds: list[dict], integrators: dict[str, str]) -> dict:
+    """The paired comparisons of every round (module docstring, ``--paired``): same-code pairs compared and
+    flagged, rk4 pairs compared and found slower, and the ratios of each kind. ``integrators``: run index →
+    integrator."""
+    counts: dict[str, int] = dict(same=0, flagged=0, rk4=0, found=0)
+    ratios: dict[str, list[float]] = dict(same_ratios=[], rk4_ratios=[])
+    flagged_runs: list[str] = []
+    for round_ in rounds:
+        for index, samples in round_["times"].items():
+            if statistics.median(samples["same1"]) < MIN_COST_S:
+                continue
+            rk4 = integrators[index] == "rk4"
+            pairs = [("same1", "same2", False)] + [(side, "slowed", rk4) for side in ("same1", "same2")]
+            for before, after, slowed in pairs:
+                comparison = paired_cost_change(samples[before], samples[after])
+                if slowed:
+                    counts["rk4"] += 1
+                    counts["found"] += comparison.changed and comparison.ratio > 1
+                    ratios["rk4_ratios"].append(comparison.ratio)
+                else:
+                    counts["same"] += 1
+                    counts["flagged"] += comparison.changed
+                    ratios["same_ratios"].append(comparison.ratio)
+                    if comparison.changed:
+                        flagged_runs.append(f"{integrators[index]} {before}/{after} ×{comparison.ratio:.3f}")
+    return dict(counts, **ratios, flagged_runs=flagged_runs)
+
+
+def paired_report(rounds: list[dict]) -> str:
+    """The Markdown summary of a paired measurement (module docstring, ``--paired``)."""
+    with tempfile.TemporaryDirectory() as temporary:
+        matrix_path = Path(temporary) / "paired.toml"
+        matrix_path.write_text(NOISE_MATRIX)
+        from foucault_bench.bench.run.matrix import load_matrix
+
+        integrators = {str(index): spec.integrator for index, spec in enumerate(load_matrix(matrix_path).runs)}
+    lines = ["| session | CPU (s) | load average (1 min) before → after |", "|---|---|---|"]
+    lines += [f"| {number} | {r['cpu_s']:.0f} | {r['load'][0]:.1f} → {r['load'][1]:.1f} |"
+              for number, r in enumerate(rounds, 1)]
+    counts = paired_counts(rounds, integrators)
+    flagged_runs = ", ".join(counts["flagged_runs"]) or "none"
+    lines += ["", f"Same-code pairs: ratios {_range(counts['same_ratios'])}; slowed rk4: ratios "
+              f"{_range(counts['rk4_ratios'])}. Flagged same-code pairs: {flagged_runs}.",
+              "", f"False alarms: {counts['flagged']} of {counts['same']} "
+              f"({100 * counts['flagged'] / max(counts['same'], 1):.1f} %, target ≤ 5 %). Slowdown found: "
+              f"{counts['found']} of {counts['rk4']} ({100 * counts['found'] / max(counts['rk4'], 1):.1f} %, "
+              "target ≥ 95 %)."]
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m foucault_bench.bench.perf.cost_noise", description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=Path, help="folder for the databases (default: a temporary one)")
-    parser.add_argument("--rounds", type=int, default=2, help="same-code rounds (at least 2; default 2)")
+    parser.add_argument("--rounds", type=int, default=2,
+                        help="same-code rounds, or with --paired sessions (at least 2; default 2)")
     parser.add_argument("--jobs", type=int, default=2, help="worker processes per round (default 2)")
     parser.add_argument("--compare", type=Path, metavar="DIR", help="no new rounds: compare those of an earlier --out DIR")
+    parser.add_argument("--paired", action="store_true",
+                        help="measure the paired rule: the sides' solves alternated in one session per round")
+    parser.add_argument("--cycles", type=int, default=5, help="with --paired: cycles per run and process set "
+                                                               "(default 5)")
+    parser.add_argument("--process-sets", type=int, default=2,
+                        help="with --paired: sets of fresh workers per session (default 2)")
     arguments = parser.parse_args(argv)
     if arguments.rounds < 2 or arguments.jobs < 1:
         parser.error("need --rounds >= 2 and --jobs >= 1")
+    if arguments.paired and arguments.cycles * arguments.process_sets < MIN_PAIRS:
+        parser.error(f"--paired needs --cycles × --process-sets >= {MIN_PAIRS} (the signed-rank test's pairs)")
+    if arguments.paired or (arguments.compare is not None and (arguments.compare / PAIRED_FILE).is_file()):
+        return paired_main(arguments)
     if arguments.compare is not None:
         rounds = json.loads((arguments.compare / ROUNDS_FILE).read_text())
         print(report([dict(round_, database=arguments.compare / f"{round_['name']}.sqlite") for round_ in rounds]))
@@ -163,6 +253,22 @@ def main(argv: list[str] | None = None) -> int:
             write_text_file(directory / ROUNDS_FILE, json.dumps([{key: value for key, value in round_.items()
                                                                   if key != "database"} for round_ in rounds]), "--out")
         print(report(rounds))
+    return 0
+
+
+def paired_main(arguments: argparse.Namespace) -> int:
+    """``--paired``, or ``--compare`` of a folder a paired measurement wrote."""
+    if arguments.compare is not None:
+        print(paired_report(json.loads((arguments.compare / PAIRED_FILE).read_text())))
+        return 0
+    with tempfile.TemporaryDirectory() as temporary:
+        directory = arguments.out or Path(temporary)
+        directory.mkdir(parents=True, exist_ok=True)
+        rounds: list[dict] = []
+        for _ in range(arguments.rounds):
+            rounds.append(paired_round(directory, cycles=arguments.cycles, process_sets=arguments.process_sets))
+            write_text_file(directory / PAIRED_FILE, json.dumps(rounds), "--out")
+        print(paired_report(rounds))
     return 0
 
 
