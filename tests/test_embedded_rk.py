@@ -242,8 +242,9 @@ model (its closed form is the reference), where vern9's main method is still abo
 def test_vern9s_main_method_approaches_order_9_from_above_down_to_round_off() -> None:
     """Why the selftest does not check vern9's order (``Vern9.main_method_unmeasurable``): with the steps really
     taken (duration / n), the local slopes of its final-position error fall steadily from above 10 towards 9 and are
-    still above 9.1 where the error reaches 3e-14: order 9, as declared (never below 8.9, so not 8), yet no fit
-    above round-off comes within 0.15 of it. The pairs whose main methods are measurable are checked by
+    still above 9 where the error reaches 3e-14 (9.10 there with plain sums in the fixed-step loop, 9.099 with the
+    compensated ones): order 9, as declared, approached from above (never below 8.9, so not 8), yet no fit above
+    round-off comes within 0.15 of it. The pairs whose main methods are measurable are checked by
     tests/test_selftest.py through ``fixed_step_method``."""
     from foucault_bench.bench.gate.order_sweep import ORDER_PERIODS, order_parameters, reference_final_state
     from foucault_bench.integrators import Problem
@@ -259,7 +260,7 @@ def test_vern9s_main_method_approaches_order_9_from_above_down_to_round_off() ->
     errors = [float(np.hypot(*(main.solve(problem, step_s=duration_s / n, monitor=False).y[-1, :2] - reference[:2])))
               / params.amplitude_m for n in VERN9_STEPS]
     slopes = np.diff(np.log(errors)) / np.diff(np.log(VERN9_STEPS)) * -1.0
-    assert errors[-1] > 1e-14 and slopes[0] > 10.0 and slopes[-1] > 9.1, (errors, slopes)
+    assert errors[-1] > 1e-14 and slopes[0] > 10.0 and slopes[-1] > 9.0 and np.all(slopes > 8.9), (errors, slopes)
     assert np.all(slopes > 8.9) and np.all(np.diff(slopes) < 0.02), slopes
 
 

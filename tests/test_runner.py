@@ -118,11 +118,16 @@ def test_quick_matrix_runs_end_to_end(tmp_path, capsys):
     # every integrator of a scene on the scene's own output grid (no run stores its steps)
     grid_points = {scene.name: scene.n_intervals + 1 for scene in matrix.scenes}
     assert (rows["n_out"] == rows["scene"].map(grid_points)).all()
-    # convergence: every integrator's reference error falls as its step or tolerance shrinks
-    for (scene, integrator), group in ok.groupby(["scene", "integrator"]):
+    # convergence: every integrator's reference error falls as its step or tolerance shrinks, down to its
+    # round-off: a run whose error is below ε per right-hand-side evaluation (the worst case of the rounding
+    # accumulated over its evaluations, each one rounding the state at most once per sum) has no truncation error
+    # left to fall (composition10 on the 90-s scene: 3.5e-12 at kh 0.2, 5.7e4 evaluations, floor 1.3e-11)
+    above_round_off = ok[ok["reference_error"] > np.finfo(float).eps * ok["nfev"]]
+    for (scene, integrator), group in above_round_off.groupby(["scene", "integrator"]):
         setting = "kh" if group["kh"].notna().all() else "tol"
         errors = group.sort_values(setting)["reference_error"].to_numpy()
         assert np.all(np.diff(errors) > 0), (scene, integrator, errors)
+    assert above_round_off["integrator"].nunique() >= ok["integrator"].nunique() - 2, "most are above round-off"
 
 
 def _check_stored_precision(ok) -> None:
