@@ -105,8 +105,7 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
     The report is built in a staging folder beside ``out`` and swapped in whole once complete
     (``bench.atomic.replacing_folder``; the command checks ``out`` first): a kill or a full disk leaves the
     previous report. Study tables are computed and stored when missing (all of them with ``recompute``); when
-    ``db`` cannot be written they are computed for this report only, with a note saying so; the missing
-    studies are computed side by side on ``jobs`` processes, like the figures."""
+    ``db`` cannot be written they are computed for this report only, with a note saying so."""
     started = time.perf_counter()
     with ResultsStore(db, create=False) as store:
         matrix_id = store.resolve_matrix_id(matrix_id)
@@ -117,8 +116,7 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
         adequacy = store.adequacy(matrix_id)
         if not adequacy.empty:
             adequacy = adequacy.assign(scene=scene_labels(adequacy, runs))
-        study_tables = {} if studies == "skip" else _study_tables(store, db, recompute=studies == "recompute",
-                                                                  jobs=jobs)
+        study_tables = {} if studies == "skip" else _study_tables(store, db, recompute=studies == "recompute")
         revisions = len(group_revisions(store.matrix_runs(), source=str(db)))
         inputs = ReportInputs(runs=runs, studies=study_tables, adequacy=adequacy,
                               provenance={"database": str(db), **_provenance(store, matrix_id)},
@@ -133,7 +131,7 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
     return 0
 
 
-def _study_tables(store: ResultsStore, db: Path, recompute: bool, jobs: int) -> dict[str, pd.DataFrame]:
+def _study_tables(store: ResultsStore, db: Path, recompute: bool) -> dict[str, pd.DataFrame]:
     """``ensure_studies`` on ``store``, storing what it computes only when the database can be written (the
     file and its folder, where SQLite keeps its journal); else a note names the tables computed for this report
     only."""
@@ -143,7 +141,7 @@ def _study_tables(store: ResultsStore, db: Path, recompute: bool, jobs: int) -> 
         if missing:
             print(f"note: {db} is read-only: the study tables {', '.join(missing)} are computed for this report "
                   "and not stored", file=sys.stderr)
-    return ensure_studies(store, recompute=recompute, store_computed=writable, jobs=jobs)
+    return ensure_studies(store, recompute=recompute, store_computed=writable)
 
 
 def _stored(store: ResultsStore, name: str) -> bool:

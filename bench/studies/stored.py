@@ -62,14 +62,13 @@ class TableStore(Protocol):
 
 
 def ensure_studies(store: TableStore | None, recompute: bool = False, configs: dict[str, object] | None = None,
-                   progress: bool = True, store_computed: bool = True, jobs: int = 1) -> dict[str, pd.DataFrame]:
+                   progress: bool = True, store_computed: bool = True) -> dict[str, pd.DataFrame]:
     """Every study's table: read from ``store`` (``read_table``) or, when missing, of another ``Study.version``
     or ``recompute``, computed with its config (``configs`` overrides the defaults by study name) and written
     back (``write_table``) unless ``store_computed`` is false (a read-only database). ``store`` may be None:
-    everything is computed and nothing is written. ``jobs`` > 1 computes the missing studies side by side in
-    that many forked processes (each study is one deterministic computation: the tables are the same)."""
+    everything is computed and nothing is written."""
     configs = configs or {}
-    tables: dict[str, pd.DataFrame] = {}
+    tables = {}
     for name, study in STUDIES.items():
         stored = None
         if store is not None and not recompute:
@@ -77,31 +76,10 @@ def ensure_studies(store: TableStore | None, recompute: bool = False, configs: d
                 stored = store.read_table(name)
             except KeyError:
                 stored = None
-        if stored is not None and not stored.empty and stored_version(stored) == study.version:
-            tables[name] = stored
-    missing = [name for name in STUDIES if name not in tables]
-    for name, computed in zip(missing, _compute(missing, configs, progress, jobs), strict=True):
-        computed[STUDY_VERSION_COLUMN] = STUDIES[name].version
-        if store is not None and store_computed:
-            store.write_table(name, computed)
-        tables[name] = computed
-    return {name: tables[name] for name in STUDIES}
-
-
-def _compute_one(name: str, config: object, progress: bool) -> pd.DataFrame:
-    return STUDIES[name].compute(config, progress=progress)
-
-
-def _compute(names: list[str], configs: dict[str, object], progress: bool, jobs: int) -> list[pd.DataFrame]:
-    """The tables of studies ``names``, in order: in this process, or with ``jobs`` > 1 in forked worker
-    processes where the platform forks (no progress bars there: they would overwrite each other)."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
-    arguments = [(name, configs.get(name, STUDIES[name].config)) for name in names]
-    workers = min(jobs, len(names))
-    if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
-        return [_compute_one(name, config, progress) for name, config in arguments]
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
-        futures = [pool.submit(_compute_one, name, config, False) for name, config in arguments]
-        return [future.result() for future in futures]
+        if stored is None or stored.empty or stored_version(stored) != study.version:
+            stored = study.compute(configs.get(name, study.config), progress=progress)
+            stored[STUDY_VERSION_COLUMN] = study.version
+            if store is not None and store_computed:
+                store.write_table(name, stored)
+        tables[name] = stored
+    return tables
