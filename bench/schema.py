@@ -77,7 +77,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("wall_time_s", "REAL", "s", "median wall time of the timed repeats (compile excluded): what a user waits, grows when runs share a core"),
     Column("wall_time_spread_s", "REAL", "s", "max − min of the timed repeats' wall times"),
     Column("repeats", "INTEGER", "", "timed repeats after the warm-up"),
-    Column("compile_time_s", "REAL", "s", "first-call CPU time minus the median CPU time (JIT compile or cache load; wall time in databases of schema version 3 and older)"),
+    Column("compile_time_s", "REAL", "s", "CPU time of the warm-up call over the scene's first output interval (JIT compile or cache load; before 2026-12-02 first-call CPU time minus the median CPU time; wall time in databases of schema version 3 and older)"),
     Column("nfev", "INTEGER", "", "right-hand-side evaluations; for the taylor family (heyoka) the Taylor steps instead, each an order-p expansion costing about p evaluations: not comparable with other families' counts"),
     Column("njev", "INTEGER", "", "Jacobian evaluations where reported"),
     Column("steps", "INTEGER", "", "accepted steps (the charts' second cost axis, counted for every family; one step = s RHS evaluations for Runge-Kutta, one order-p Taylor expansion for heyoka)"),

@@ -122,12 +122,14 @@ def test_quick_matrix_runs_end_to_end(tmp_path, capsys):
     # round-off: a run whose error is below ε per right-hand-side evaluation (the worst case of the rounding
     # accumulated over its evaluations, each one rounding the state at most once per sum) has no truncation error
     # left to fall (composition10 on the 90-s scene: 3.5e-12 at kh 0.2, 5.7e4 evaluations, floor 1.3e-11)
-    above_round_off = ok[ok["reference_error"] > np.finfo(float).eps * ok["nfev"]]
+    # (the implicit schemes store no evaluation count: no floor for them)
+    above_round_off = ok[ok["reference_error"] > np.finfo(float).eps * ok["nfev"].fillna(0.0)]
     for (scene, integrator), group in above_round_off.groupby(["scene", "integrator"]):
         setting = "kh" if group["kh"].notna().all() else "tol"
         errors = group.sort_values(setting)["reference_error"].to_numpy()
         assert np.all(np.diff(errors) > 0), (scene, integrator, errors)
-    assert above_round_off["integrator"].nunique() >= ok["integrator"].nunique() - 2, "most are above round-off"
+    below = sorted(set(ok["integrator"]) - set(above_round_off["integrator"]))
+    assert set(below) <= {"composition8", "composition10", "vern9"}, below  # the orders ≥ 8 on a 90-s scene
 
 
 def _check_stored_precision(ok) -> None:

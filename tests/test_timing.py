@@ -248,3 +248,33 @@ def test_calibration_chunks_follow_the_first_repeat_and_stay_within_their_share(
             chunks_s += 0.0045
     assert events == expected and timing.calibration_chunks_s == (0.0045,) * expected.count("chunk")
     assert 1 < len(timing.calibration_chunks_s) < 20  # interleaved, not one per repeat at this share
+
+
+def test_a_short_warm_up_call_replaces_the_warm_up_run() -> None:
+    """Rule 1b: with ``warm_up`` the protocol calls it once, untimed as a repeat, and its CPU time is the compile
+    time; the first repeat's result is the run's, and every call of ``call`` is a timed repeat (a run over the
+    time cap is integrated once, not twice). A rejected first repeat ends the timing without a second call."""
+    run = _FakeRun([0.3, 0.2, 0.21])  # 0.3 s: the warm-up (compilation); then two repeats of a 0.2-s run
+    warm_ups: list[float] = []
+
+    def warm_up() -> None:
+        warm_ups.append(run.cpu_s)
+        run()
+
+    first, last, timing = time_repeated(run, TimingPolicy(), wall_clock=lambda: run.wall_s,
+                                        cpu_clock=lambda: run.cpu_s, warm_up=warm_up)
+    assert warm_ups == [0.0] and timing is not None
+    assert first == last == 2 and run.calls == 2  # the warm-up (call 1), then one repeat over the 0.1-s cap
+    assert timing.repeats == 1 and timing.cpu_repeats_s == pytest.approx((0.2,))
+    assert timing.compile_s == pytest.approx(0.3) and timing.cpu_ci95_rel is None
+
+    steady = _FakeRun([0.05] + [0.01] * 20)
+    first, last, timing = time_repeated(steady, TimingPolicy(), wall_clock=lambda: steady.wall_s,
+                                        cpu_clock=lambda: steady.cpu_s, warm_up=steady)
+    assert timing is not None and timing.repeats == CI_MIN_REPEATS and first == 2 and last == CI_MIN_REPEATS + 1
+    assert timing.compile_s == pytest.approx(0.05) and timing.cpu_repeats_s == pytest.approx((0.01,) * CI_MIN_REPEATS)
+
+    rejected = _FakeRun([0.01])
+    first, last, timing = time_repeated(rejected, TimingPolicy(), accept=lambda result: result == 0,
+                                        warm_up=rejected)
+    assert timing is None and rejected.calls == 2 and first == last == 2

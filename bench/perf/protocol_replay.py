@@ -5,9 +5,10 @@
 
 From the rows of one matrix run (``cpu_time_repeats_s``: the timed repeats' CPU times in the order measured):
 
-* **where the CPU went**, core-seconds summed over the rows: the runs once (the warm-up call, whose result the
-  verdicts use, plus the monitored call of the integrators that stream step metrics), the timed repeats, and
-  compilation or cache loads (``compile_time_s``);
+* **where the CPU went**, core-seconds summed over the rows: the runs once (the monitored call of the
+  integrators that stream step metrics), the timed repeats, and the warm-up over the first output interval
+  (``compile_time_s``: compilation or cache loads). Rows measured before 2026-12-02 also spent a whole warm-up
+  run each, one ``cpu_time_s``, which this breakdown does not count;
 * **a replay of another policy** (``bench.run.timing.TimingPolicy``, the options above; the others keep the
   stored run's values): its stopping rule (``bench.run.timing.stop_repeating``) applied to the prefixes of each
   row's stored repeats. A policy that stops no later than the stored one is replayed exactly: the same
@@ -55,7 +56,7 @@ def _once_s(row: Any) -> float:
         streams = get_integrator(str(row["integrator"])).streams_step_metrics
     except KeyError:  # a plug-in's integrator: its module is not imported here
         streams = False
-    return float(row["cpu_time_s"]) * (2 if streams else 1)
+    return float(row["cpu_time_s"]) if streams else 0.0
 
 
 def replay(frame: pd.DataFrame, policy: TimingPolicy) -> dict[str, Any]:

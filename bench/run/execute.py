@@ -24,6 +24,7 @@ This module imports no numerical library at the top (the main process imports it
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import json
 import math
@@ -143,7 +144,7 @@ def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
     """Run one matrix entry and return its row (``bench.schema.COLUMNS``). Never raises."""
     from foucault_bench.bench.problems.reference import reference_for
     from foucault_bench.bench.verdicts.columns import compute_verdicts
-    from foucault_bench.integrators import Solution, get_integrator
+    from foucault_bench.integrators import Problem, Solution, get_integrator
 
     limit_threads()
     row = base_row(spec, matrix_id)
@@ -164,9 +165,17 @@ def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
             check_solution(solution, n_out)
             return solution
 
+        first_interval = Problem(model=problem.model, params=problem.params, t_out=problem.t_out[:2].copy())
+
+        def warm_up() -> None:
+            """Compile or load what the run calls (bench.run.timing, rule 1b); what fails here, the timed call
+            itself reports."""
+            with contextlib.suppress(Exception):
+                integrator.solve(first_interval, step_s=spec.step_s, tol=spec.tol, monitor=False)
+
         timed, last, timing = time_repeated(lambda: solve(False), spec.timing,
                                             accept=lambda solution: solution.status == STATUS_OK,
-                                            calibrate=calibration_chunk_cpu_s)
+                                            calibrate=calibration_chunk_cpu_s, warm_up=warm_up)
         first = solve(True) if integrator.streams_step_metrics else timed  # untimed: + per-step metrics
         row.update(status=first.status, message=first.message,
                    **{name: None if getattr(first, name) is None else int(getattr(first, name)) for name in COUNTERS})

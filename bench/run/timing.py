@@ -7,7 +7,13 @@ them once, at import).
 Timing protocol (``time_repeated``), the same for every integrator; it repeats a run until its cost is known
 to a stated precision (defaults: ``TimingPolicy``):
 
-1. one warm-up call; its result is the one the verdicts are computed from;
+1. one warm-up call; its result is the one the verdicts are computed from; or, when the caller gives a
+   ``warm_up`` (1b; the runner does): that short call instead (the runner's: the same run over the scene's
+   first output interval, which compiles or loads every function the run calls: numba's, CVODE's and
+   heyoka's code is compiled per function and argument types, not per length of run), and the first timed
+   repeat's result is the one the verdicts are computed from. A run then costs its repeats plus a fraction of
+   one output interval, not one more whole run: runs longer than the cap on time (below), which are timed
+   once, cost half as much;
 2. timed repeats of the identical call. After each repeat the protocol stops as soon as
 
    * the 95 % confidence interval of the median CPU time is within ± ``target_ci95_rel`` (3 %) of the median
@@ -23,7 +29,8 @@ to a stated precision (defaults: ``TimingPolicy``):
    half-width of the 95 % confidence interval of the median (``None`` below ``CI_MIN_REPEATS`` repeats) and the
    repeats' CPU times themselves (what a rank test between two runs needs); the compile time is
    ``warm-up − median`` in CPU time (JIT compilation or a disk-cache load; clipped at 0 because a warm-up that
-   compiles nothing can be faster than the median). CPU time, not wall time: on a loaded machine the warm-up's
+   compiles nothing can be faster than the median), or with a ``warm_up`` call (1b) that call's CPU time
+   (compilation or cache load, plus one output interval's integration). CPU time, not wall time: on a loaded machine the warm-up's
    wall time is mostly waiting for a core (seen: 59 s of "compile" over 4 runs at load average 21).
 4. a calibration (optional, ``calibrate``: the runner's is ``bench.run.calibration``), a fixed compiled
    workload timed in chunks between the repeats: after the first repeat and after each later one while the
@@ -160,35 +167,47 @@ def time_repeated(call: Callable[[], Result], policy: TimingPolicy,
                   wall_clock: Callable[[], float] = time.perf_counter,
                   cpu_clock: Callable[[], float] = time.thread_time,
                   calibrate: Callable[[], float] | None = None,
-                  calibration_share: float = 0.1) -> tuple[Result, Result, Timing | None]:
+                  calibration_share: float = 0.1,
+                  warm_up: Callable[[], object] | None = None) -> tuple[Result, Result, Timing | None]:
     """Run ``call`` by the protocol of the module docstring.
 
-    Returns the warm-up result, the last repeat's result (the warm-up's when no repeat was made) and the
-    timing; when ``accept(warm-up result)`` is false (a failed or diverged run) no repeat is made and the
-    timing is ``None``. ``wall_clock`` and ``cpu_clock`` are the two clocks (seconds; a test passes fakes).
-    ``calibrate`` (optional) times one chunk of a fixed workload and returns its CPU time: it is called after
-    the first repeat and after every later one while the chunks so far cost less than ``calibration_share``
-    of the repeats (module docstring, rule 4); it never counts in the repeats.
+    Returns the first result (the warm-up's, or with ``warm_up`` the first repeat's), the last repeat's result
+    (the first when no repeat was made) and the timing; when ``accept(first result)`` is false (a failed or
+    diverged run) no further repeat is made and the timing is ``None``. ``wall_clock`` and ``cpu_clock`` are
+    the two clocks (seconds; a test passes fakes). ``calibrate`` (optional) times one chunk of a fixed workload
+    and returns its CPU time: it is called after the first repeat and after every later one while the chunks
+    so far cost less than ``calibration_share`` of the repeats (module docstring, rule 4); it never counts in
+    the repeats. ``warm_up`` (optional, rule 1b): a short call that compiles or loads what ``call`` runs, made
+    instead of the warm-up call.
     """
     cpu_start = cpu_clock()
-    first = call()
-    warm_up_cpu_s = cpu_clock() - cpu_start
-    if not accept(first):
-        return first, first, None
+    first: Result | None = None
+    if warm_up is None:
+        first = call()
+        warm_up_cpu_s = cpu_clock() - cpu_start
+        if not accept(first):
+            return first, first, None
+    else:
+        warm_up()
+        warm_up_cpu_s = cpu_clock() - cpu_start
     durations: list[float] = []
     cpu_durations: list[float] = []
     chunks: list[float] = []
-    last = first
     while True:
         start, cpu_start = wall_clock(), cpu_clock()
         last = call()
         cpu_durations.append(cpu_clock() - cpu_start)
         durations.append(wall_clock() - start)
+        if first is None:  # with ``warm_up``: the first repeat's result is the run's
+            first = last
+            if not accept(first):
+                return first, first, None
         if calibrate is not None and (not chunks or math.fsum(chunks) < calibration_share * math.fsum(cpu_durations)):
             chunks.append(calibrate())
         if stop_repeating(cpu_durations, policy):
             break
     cpu_median_s = statistics.median(cpu_durations)
+    assert first is not None  # set by the warm-up or the first repeat
     return first, last, Timing(
         median_s=statistics.median(durations),
         spread_s=max(durations) - min(durations),
@@ -197,7 +216,7 @@ def time_repeated(call: Callable[[], Result], policy: TimingPolicy,
         cpu_ci95_rel=median_ci95_rel(cpu_durations),
         cpu_repeats_s=tuple(cpu_durations),
         repeats=len(durations),
-        compile_s=max(0.0, warm_up_cpu_s - cpu_median_s),
+        compile_s=warm_up_cpu_s if warm_up is not None else max(0.0, warm_up_cpu_s - cpu_median_s),
         calibration_chunks_s=tuple(chunks),
     )
 
