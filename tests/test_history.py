@@ -16,8 +16,6 @@ import io
 import json
 import math
 import sqlite3
-import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -31,6 +29,7 @@ from foucault_bench.bench.history.changes import (
 from foucault_bench.bench.history.load import load_history
 from foucault_bench.bench.history.revisions import ordered_revisions
 from foucault_bench.reports.history_page import HISTORY_COLUMNS
+from git_repository import git, one_commit_repository
 
 COMMITS = ["1" * 40, "2" * 40, "3" * 40, "4" * 40]
 PLANTED_ACCURACY = ("rk4", "precession_rate_ref_error")
@@ -313,30 +312,24 @@ def test_baseline_with_other_physics_is_refused(history_db, tmp_path, capsys):
     assert status == 2 and len(error) == 1 and "other physics" in error[0]
 
 
-def _git(repository: Path, *arguments: str) -> str:
-    return subprocess.run(["git", *arguments], cwd=repository, check=True, capture_output=True, text=True,
-                          env={"GIT_AUTHOR_NAME": "t", "GIT_AUTHOR_EMAIL": "t@t", "GIT_COMMITTER_NAME": "t",
-                               "GIT_COMMITTER_EMAIL": "t@t", "PATH": "/usr/bin:/bin"}).stdout.strip()
-
-
 def test_bisect_names_the_planted_commit(tmp_path):
     """A repository of eight commits whose file ``value`` holds the verdict; the value changes at commit 6.
     ``measure`` reads the file at a commit (the search itself, not the per-commit runs, is what is tested)."""
     repository = tmp_path / "repo"
     repository.mkdir()
-    _git(repository, "init", "-q")
+    git(repository, "init", "-q")
     commits = []
     for number in range(8):
         (repository / "value").write_text("1.0" if number < 6 else "1.5", encoding="utf-8")
         (repository / "log").write_text(str(number), encoding="utf-8")
-        _git(repository, "add", "-A")
-        _git(repository, "commit", "-q", "-m", f"commit {number}")
-        commits.append(_git(repository, "rev-parse", "HEAD"))
+        git(repository, "add", "-A")
+        git(repository, "commit", "-q", "-m", f"commit {number}")
+        commits.append(git(repository, "rev-parse", "HEAD"))
 
     def measure(commit: str) -> object:
         if commit == commits[4]:
             raise RuntimeError("cannot be built")  # a skipped commit is stepped over
-        return float(_git(repository, "show", f"{commit}:value"))
+        return float(git(repository, "show", f"{commit}:value"))
 
     configuration = Configuration("short", "rk4", "reference_error", kh=0.1)
     answer = bisect(repository, commits[0], commits[7], configuration, measure=measure)
@@ -346,12 +339,7 @@ def test_bisect_names_the_planted_commit(tmp_path):
 
 
 def test_bisect_refuses_an_unknown_revision(tmp_path, capsys):
-    repository = tmp_path / "repo"
-    repository.mkdir()
-    _git(repository, "init", "-q")
-    (repository / "f").write_text("x", encoding="utf-8")
-    _git(repository, "add", "-A")
-    _git(repository, "commit", "-q", "-m", "one")
+    repository = one_commit_repository(tmp_path / "repo")
     status, _ = run_cli(["bisect", "--repo", str(repository), "--good", "nosuch", "--bad", "HEAD", "--scene", "s",
                          "--integrator", "rk4", "--kh", "0.1", "--verdict", "reference_error"])
     error = capsys.readouterr().err.strip().splitlines()

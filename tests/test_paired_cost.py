@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import subprocess
 from pathlib import Path
 
 import pandas as pd
@@ -18,6 +17,7 @@ from foucault_bench.bench.cli import main
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.gate.paired_cost_gate import paired_cost_outcomes, resolved_revision
 from foucault_bench.bench.history.paired_cost import Side, cycle_order, paired_times
+from git_repository import one_commit_repository
 
 MATRIX = ('name = "paired"\ndescription = "two short runs"\nscenes = ["seed_2min"]\n'
           'integrators = ["rk4", "dopri5"]\nkh = [0.2]\ntol = [1e-6]\n')
@@ -25,21 +25,9 @@ GATE = ('description = "paired gate"\n[[bound]]\nscene = "seed_2min"\nintegrator
         'basis = "rk4 is stable at this step"\n')
 
 
-def _git(repository: Path, *arguments: str) -> str:
-    return subprocess.run(["git", *arguments], cwd=repository, check=True, capture_output=True, text=True,
-                          env={"GIT_AUTHOR_NAME": "t", "GIT_AUTHOR_EMAIL": "t@t", "GIT_COMMITTER_NAME": "t",
-                               "GIT_COMMITTER_EMAIL": "t@t", "PATH": "/usr/bin:/bin"}).stdout.strip()
-
-
 @pytest.fixture
 def repository(tmp_path) -> Path:
-    folder = tmp_path / "repo"
-    folder.mkdir()
-    _git(folder, "init", "-q")
-    (folder / "f").write_text("x", encoding="utf-8")
-    _git(folder, "add", "-A")
-    _git(folder, "commit", "-q", "-m", "one")
-    return folder
+    return one_commit_repository(tmp_path / "repo")
 
 
 def test_the_sides_take_turns_and_no_side_always_starts():
