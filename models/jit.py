@@ -142,8 +142,7 @@ class _FingerprintCache(FunctionCache):
     def entry_lock_path(self, sig, codegen) -> str:
         """The lock file of ``sig``'s cache entry (module docstring, "Compiled once per machine")."""
         self._impl.locator.ensure_cache_path()
-        cache_file = cast(_KeyedDataCacheFile, self._cache_file)
-        return os.path.join(self._cache_path, f"{cache_file.entry_name(self._index_key(sig, codegen))}.lock")
+        return os.path.join(self._cache_path, f"{self._cache_file.entry_name(self._index_key(sig, codegen))}.lock")
 
 
 _locks = threading.local()
