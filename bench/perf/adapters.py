@@ -16,7 +16,7 @@ derivative compiled by numba, ``Model.numba_jacobian_into``) against CVODE's int
 Setting: the 3 m laboratory pendulum of ``bench.problems.scenes`` (spherical model, the physical one) over
 ``DURATION_S`` with its 0.45 s output grid, tol = ``TOL``. Timed by the thread's CPU time (every library here
 computes on the calling thread; ``foucault-bench perf`` caps the BLAS and OpenMP pools at one thread, as the
-runner's workers do), in interleaved rounds.
+runner's workers do), in interleaved rounds (``measure.RATIO_ROUNDS``; 3 with ``--quick``).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from foucault_bench.bench.perf.measure import Row, interleaved, median_ratio
+from foucault_bench.bench.perf.measure import RATIO_ROUNDS, Row, interleaved, median_ratio
 from foucault_bench.bench.problems.scenes import SCENES
 from foucault_bench.integrators import get_integrator
 from foucault_bench.integrators.adaptive import absolute_tolerance, heyoka_tolerance, step_budget
@@ -155,7 +155,7 @@ def cvode_floor_us(problem) -> float:
 def run(quick: bool) -> tuple[list[Row], list[list[str]], list[str]]:
     """Time every adapter against its bare library; the target rows, a detail table and its headers."""
     problem = _scene_problem(quick)
-    rounds = 3 if quick else 15
+    rounds = 3 if quick else RATIO_ROUNDS
     headers = ["integrator", "adapter s", "bare s", "adapter / bare", "nfev", "bare µs / nfev"]
     rows, table = [], []
     for name, make_bare in BARE.items():

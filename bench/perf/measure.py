@@ -40,6 +40,10 @@ ROUND_MIN_S = 0.02
 """Length of one contender's batch in a round: 20 ms, long against the scheduler's interruptions of the
 thread (a few ms at most on a loaded machine), short enough for tens of rounds per second."""
 MAX_BATCH = 1000
+RATIO_ROUNDS = 41
+"""Rounds for a ratio that should repeat within ± 3 % from one run of ``foucault-bench perf`` to the next:
+measured twice in two processes, 41 rounds of batched sub-millisecond calls repeated within ± 1.3 % and 15
+rounds did not (bench/PERF.md "The perf harness's ratios run twice")."""
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,9 @@ first (adaptive before fixed-step, longer scenes and finer settings first), whic
 
 Compile once: the cheapest run of each compiled function (``compile_key``: integrator and model, and ε for
 heyoka) runs before every other run (``compile_first``), so that each function is compiled once per machine
-into numba's and heyoka's disk caches, and the other workers load it instead of compiling it too.
+into numba's and heyoka's disk caches, and the other workers load it instead of compiling it too. A worker
+that reaches a function another is compiling waits for it (each compilation holds its cache entry's lock,
+``models.jit``) instead of compiling it too; this order keeps that wait rare.
 """
 
 from __future__ import annotations

@@ -58,7 +58,10 @@ from __future__ import annotations
 import collections
 import copy
 import functools
+import hashlib
+import os
 import threading
+import time
 from dataclasses import dataclass
 from typing import Any, ClassVar, cast
 
@@ -73,6 +76,7 @@ from foucault_bench.integrators.adaptive import (
 from foucault_bench.integrators.base import COST_COMPILED, STATUS_DIVERGED, STATUS_FAILED, Problem, Solution, StreamedMetrics
 from foucault_bench.integrators.registry import register
 from foucault_bench.models import Model
+from foucault_bench.models.jit import built_once, log_build
 
 REFERENCE_TOLERANCE = 1.0e-33
 """``tol`` of the quadruple-precision reference runs (real128 carries about 34 significant digits)."""
@@ -105,9 +109,34 @@ class _TurningPointRecorder:
         self.rows.append((float(time), float(position[0]), float(position[1])))
 
 
+def _disk_cache_lock(key: str) -> str | None:
+    """The lock file, in heyoka's disk cache, of the integrator ``key`` names (None when that cache is off)."""
+    import heyoka
+
+    state = heyoka.llvm_state
+    if not state.get_diskcache_enabled():
+        return None
+    folder = state.get_diskcache_path()
+    os.makedirs(folder, exist_ok=True)
+    return os.path.join(folder, f"foucault-bench.{hashlib.sha256(key.encode()).hexdigest()[:16]}.lock")
+
+
 @functools.lru_cache(maxsize=64)
 def _compiled_template(model: Model, precision: str, heyoka_tol: float, with_events: bool):
-    """The JIT-compiled integrator for one (model, precision, ε, events) with a placeholder state; runs copy it."""
+    """The JIT-compiled integrator for one (model, precision, ε, events) with a placeholder state; runs copy it.
+
+    Built under a lock per key in heyoka's disk cache (``models.jit.built_once``): processes that need the same
+    integrator at once (the test workers) compile it once, the others wait and load heyoka's cached code."""
+    key = repr((model.name, precision, heyoka_tol, with_events))
+    with built_once(lambda: _disk_cache_lock(key)) as waited_s:
+        started_s = time.process_time()
+        template = _build_template(model, precision, heyoka_tol, with_events)
+        cpu_s = time.process_time() - started_s
+    log_build("built", waited_s, cpu_s, cpu_s, f"heyoka.taylor_adaptive {model.name}", key)
+    return template
+
+
+def _build_template(model: Model, precision: str, heyoka_tol: float, with_events: bool):
     import heyoka
 
     fp_type = _fp_type(precision)
