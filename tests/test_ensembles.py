@@ -220,6 +220,10 @@ def test_advise_worst_against_a_recomputation(database: Path) -> None:
     assert answer.recommended["kh"] == expected["kh"]
     assert answer.recommended["worst_member"] == expected["scene"] == answer.scene.name
     assert answer.meeting == len({row["integrator"] for row in meeting})
+    from foucault_bench.bench.advise.render import render_text
+
+    assert answer.recommended["batch_members"] == expected["batch_members"] == len(AZIMUTHS)
+    assert f"ms (1/{len(AZIMUTHS)} of its batch's)" in render_text(answer).splitlines()[1]
 
 
 def test_report_charts_read_back_against_the_database(database: Path) -> None:
