@@ -3,7 +3,8 @@
 * ``code_version``: SHA-256 of the package version and of every source file that determines a row's numbers
   (``NUMBER_SOURCES``, relative to ``PACKAGE_ROOT``) plus the sources of plug-in modules (those a matrix names
   and those the registry loaded from entry points; a plug-in package with all its modules), so that
-  ``--resume`` never reuses a row of other code;
+  ``--resume`` never reuses a row of other code; ``ensemble_code_version`` adds the batch runner's sources
+  (``BATCH_SOURCES``) for ensemble members;
 * ``source_digest``: the same hash over any list of files (the reference cache keys its files with it);
 * ``digest``: a short SHA-256 of plain data (run keys, matrix hashes);
 * ``git_commit``, ``cpu_model``, ``package_versions``, ``machine``: the matrix run's provenance record;
@@ -34,6 +35,9 @@ NUMBER_SOURCES = ("models/*.py", "integrators/*.py", "integrators/methods/*.py",
                   "bench/scenes/*.toml",
                   "bench/verdicts/*.py", "bench/run/execute.py", "bench/run/timing.py")
 """Source files (relative to ``PACKAGE_ROOT``) whose contents are part of every run key."""
+BATCH_SOURCES = ("bench/run/ensemble_jobs.py",)
+"""Source files that also determine the rows of ensemble members, which run as batches (their cost shares):
+part of their run keys only (``ensemble_code_version``), so that the other runs' keys do not depend on them."""
 PROVENANCE_PACKAGES = ("numpy", "scipy", "numba", "heyoka", "scikit-sundae", "pandas", "distributed")
 """Libraries whose versions each matrix run records."""
 
@@ -88,6 +92,12 @@ def code_version(plugins: tuple[str, ...] = ()) -> str:
     ``--resume`` only when none of them changed, committed or not."""
     paths = sorted({path for pattern in NUMBER_SOURCES for path in PACKAGE_ROOT.glob(pattern)})
     return source_digest(package_version(), [*paths, *plugin_sources(plugins)])
+
+
+@functools.lru_cache(maxsize=None)
+def ensemble_code_version(plugins: tuple[str, ...] = ()) -> str:
+    """The code version of an ensemble member's run: ``code_version`` and the batch sources (``BATCH_SOURCES``)."""
+    return source_digest(code_version(plugins), [PACKAGE_ROOT / path for path in BATCH_SOURCES])
 
 
 @functools.lru_cache(maxsize=1)

@@ -86,6 +86,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("cpu_time_ci95_rel", "REAL", "", "relative half-width of the distribution-free 95 % confidence interval of the median CPU time (order statistics, bench.run.timing.median_ci95): the stated precision of cpu_time_s; NULL with fewer than 6 timed repeats (no such interval exists) and in rows of an older database"),
     Column("cpu_time_repeats_s", "TEXT", "s", "the timed repeats' CPU times, a JSON list of seconds in the order they were measured (what a rank test between two runs needs)"),
     Column("calibration_cpu_s", "REAL", "s", "CPU time of a fixed compiled loop (bench.run.calibration) timed in the worker process that made the run: divide cpu_time_s by it to compare runs of two machines"),
+    Column("batch_members", "INTEGER", "", "ensemble members run and timed together as one batch (bench.run.ensemble_jobs): the row's cpu_time_s, wall_time_s, their spreads, cpu_time_repeats_s and compile_time_s are the batch's divided by this count, an equal share (repeats and cpu_time_ci95_rel are the batch's); NULL for a run timed alone"),
 )
 
 COLUMN_NAMES: tuple[str, ...] = tuple(column.name for column in COLUMNS)
@@ -122,7 +123,7 @@ DECLARED_FACTS: dict[str, str] = {
 }
 """Results column → the ``integrators.Integrator`` class attribute it stores."""
 
-SCHEMA_VERSION = 5
+SCHEMA_VERSION = 6
 """Version of ``COLUMNS`` (stored as the database's ``PRAGMA user_version``)."""
 SCENE_KEY_MIGRATION = (
     "runs and adequacy rows lack scene_key: added, and filled for the old rows of a built-in scene (or its "
@@ -146,16 +147,22 @@ ENSEMBLE_MIGRATION = (
     "swept values and the setting asked for): "
     "added as NULL columns, right for the old rows, none of which belonged to an ensemble"
 )
+BATCH_MIGRATION = (
+    "runs lack batch_members (the members of an ensemble's batch a row's cost is a share of): added as a NULL "
+    "column, right for the old rows, each of which was timed alone"
+)
 MIGRATIONS: dict[int, str] = {
     1: "runs lack the declared integrator facts (declared_order, stages, adaptive, stability_limit_kh) and the "
        "precession errors in rad/s and relative to Ω_E (precession_rate_error_rad_s, _earth, "
        "precession_rate_ref_error_rad_s, _earth): added as NULL columns, unknown for the old rows; and, as for "
        "version 2, " + SCENE_KEY_MIGRATION + "; and " + VERDICTS_OF_REAL_PENDULUMS_MIGRATION + "; and "
-       + TIMING_MIGRATION + "; and " + ENSEMBLE_MIGRATION,
+       + TIMING_MIGRATION + "; and " + ENSEMBLE_MIGRATION + "; and " + BATCH_MIGRATION,
     2: SCENE_KEY_MIGRATION + "; and " + VERDICTS_OF_REAL_PENDULUMS_MIGRATION + "; and " + TIMING_MIGRATION
-       + "; and " + ENSEMBLE_MIGRATION,
-    3: VERDICTS_OF_REAL_PENDULUMS_MIGRATION + "; and " + TIMING_MIGRATION + "; and " + ENSEMBLE_MIGRATION,
-    4: ENSEMBLE_MIGRATION,
+       + "; and " + ENSEMBLE_MIGRATION + "; and " + BATCH_MIGRATION,
+    3: VERDICTS_OF_REAL_PENDULUMS_MIGRATION + "; and " + TIMING_MIGRATION + "; and " + ENSEMBLE_MIGRATION
+       + "; and " + BATCH_MIGRATION,
+    4: ENSEMBLE_MIGRATION + "; and " + BATCH_MIGRATION,
+    5: BATCH_MIGRATION,
 }
 """Older schema version → what a database written under it lacks (the store adds the missing columns)."""
 

@@ -80,6 +80,14 @@ def work_precision_of(picked: dict[str, pd.DataFrame], verdict: str) -> Figure:
     return figure
 
 
+def _cost_note(group: pd.DataFrame) -> str:
+    """What the charts' CPU time is when the members were timed in batches (``batch_members``), else nothing."""
+    if "batch_members" not in group.columns or group["batch_members"].isna().all():
+        return ""
+    return (" CPU time is a member's equal share of its batch's (the members of one integrator and setting run "
+            "as one batch, bench/run/ensemble_jobs.py): what a member costs when the ensemble is run.")
+
+
 def add_section(builder: Any, runs: pd.DataFrame) -> None:
     """The section "Ensembles" (nothing when no row is an ensemble member): per ensemble, its summary table,
     each verdict against the swept parameter, and the work-precision of its worst and median members; file
@@ -107,6 +115,6 @@ def add_section(builder: Any, runs: pd.DataFrame) -> None:
         if not picked["worst member"].empty:
             builder.curves(f"ensemble_{stem}_work_precision",
                            f"{ensemble}: work-precision of the worst member and of the median member of each "
-                           f"integrator and setting ({VERDICT_TITLES[WORK_PRECISION_VERDICT]}).",
+                           f"integrator and setting ({VERDICT_TITLES[WORK_PRECISION_VERDICT]}).{_cost_note(group)}",
                            lambda _table, picked=picked: work_precision_of(picked, WORK_PRECISION_VERDICT), group)
 

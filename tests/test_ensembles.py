@@ -1,6 +1,7 @@
 """Ensembles: declarations refused one line per problem, members expanded and tagged, the summary, the worst
 member, advise --worst and the report's ensemble charts recomputed from the stored member rows (plain sqlite3),
-and the batch seam (``bench.run.ensemble_jobs.run_members``) equal to one-by-one runs."""
+and the batches the runner makes of each configuration (``bench.run.ensemble_jobs.run_members``) equal to the
+runs alone, a diverging or hanging member its own row."""
 
 from __future__ import annotations
 
@@ -219,6 +220,10 @@ def test_advise_worst_against_a_recomputation(database: Path) -> None:
     assert answer.recommended["kh"] == expected["kh"]
     assert answer.recommended["worst_member"] == expected["scene"] == answer.scene.name
     assert answer.meeting == len({row["integrator"] for row in meeting})
+    from foucault_bench.bench.advise.render import render_text
+
+    assert answer.recommended["batch_members"] == expected["batch_members"] == len(AZIMUTHS)
+    assert f"ms (1/{len(AZIMUTHS)} of its batch's)" in render_text(answer).splitlines()[1]
 
 
 def test_report_charts_read_back_against_the_database(database: Path) -> None:
@@ -273,8 +278,8 @@ def same(first: object, second: object) -> bool:
 
 
 def test_run_members_equals_one_by_one_runs() -> None:
-    """The batch seam: the rows of one configuration's members through ``run_members`` equal, accuracy column
-    by column and bit for bit, the rows of the same runs one by one."""
+    """The batch task: the rows of one configuration's members through ``run_members`` equal, accuracy column
+    by column and bit for bit, the rows of the same runs one by one; their cost is the batch's, shared."""
     from foucault_bench.bench.run.ensemble_jobs import configurations, run_members
     from foucault_bench.bench.run.execute import execute_run
 
@@ -286,8 +291,136 @@ def test_run_members_equals_one_by_one_runs() -> None:
         assert first["status"] == second["status"] == "ok"
         for column in VERDICT_COLUMNS:
             assert same(first[column], second[column]), column
+        assert first["batch_members"] == 2 and second["batch_members"] is None
     with pytest.raises(ValueError):
         run_members([matrix.runs[0], parse_matrix({**TINY, "kh": [0.1]}, source="t").runs[0]], "m")
+
+
+def rows_alone(matrix) -> dict[str, dict]:
+    """Every run of ``matrix`` alone (``execute_run``, as the runner ran runs before batches), by run key."""
+    from foucault_bench.bench.run.execute import execute_run
+
+    return {spec.run_key: execute_run(spec, "alone") for spec in matrix.runs}
+
+
+def test_the_runner_runs_each_configuration_as_one_batch_equal_to_the_runs_alone(database: Path) -> None:
+    """Through the runner (``database``: TINY by ``run_matrix``): each member's row is the row of its run alone,
+    bit for bit in every accuracy column, counter and step for the fixed-step methods; its cost columns are its
+    batch's share (one value for all members of a configuration, ``batch_members`` = the members)."""
+    alone = rows_alone(parse_matrix(TINY, source="tiny"))
+    stored = stored_rows(database)
+    assert {row["run_key"] for row in stored} == set(alone)
+    for row in stored:
+        expected = alone[row["run_key"]]
+        for column in (*VERDICT_COLUMNS, "status", "message", "nfev", "steps", "rejected_steps", "kh", "step_s"):
+            assert same(row[column], expected[column]), column
+        assert row["batch_members"] == len(AZIMUTHS) and expected["batch_members"] is None
+        repeats = json.loads(row["cpu_time_repeats_s"])
+        assert len(repeats) == row["repeats"] and row["cpu_time_s"] == pytest.approx(np.median(repeats), rel=1e-12)
+    for setting in ("kh=0.2", "kh=0.1"):
+        for integrator in ("verlet", "rk4"):
+            shares = {(row["cpu_time_s"], row["wall_time_s"], row["compile_time_s"]) for row in stored
+                      if row["integrator"] == integrator and row["ensemble_setting"] == setting}
+            assert len(shares) == 1
+
+
+def test_adaptive_batches_through_the_runner_equal_the_runs_alone(tmp_path: Path) -> None:
+    """dop853 (a compiled loop over members): bitwise; heyoka_taylor (SIMD lanes): the same step counts, every
+    error equal to round-off (relative 1e-9 of errors that are themselves ≥ 1e-12, far above the 1e-13 of the
+    state scale that ``tests/test_batch.py`` bounds the states' difference by)."""
+    from foucault_bench.bench.run.runner import run_matrix
+    from foucault_bench.bench.run.store import ResultsStore
+
+    matrix = parse_matrix({key: value for key, value in {**TINY, "integrators": ["dop853", "heyoka_taylor"],
+                                                           "tol": [1e-8]}.items() if key != "kh"}, source="tiny")
+    with ResultsStore(tmp_path / "db.sqlite") as store:
+        run_matrix(matrix, store, jobs=1, progress=False)
+    alone = rows_alone(matrix)
+    for row in stored_rows(tmp_path / "db.sqlite"):
+        expected = alone[row["run_key"]]
+        assert row["status"] == expected["status"] == "ok" and row["batch_members"] == len(AZIMUTHS)
+        assert (row["nfev"], row["steps"]) == (expected["nfev"], expected["steps"])
+        for column in VERDICT_COLUMNS:
+            if row["integrator"] == "dop853" or row[column] is None:
+                assert same(row[column], expected[column]), column
+            else:
+                assert row[column] == pytest.approx(expected[column], rel=1e-9, abs=1e-15), column
+
+
+PICKY = '''
+"""A test-only integrator (registered when imported): dop853's solution, except for chosen release azimuths."""
+from typing import ClassVar
+
+from foucault_bench.integrators import get_integrator, register
+from foucault_bench.integrators.adaptive import AdaptiveIntegrator
+from foucault_bench.integrators.base import Solution
+
+DIVERGES_AT_DEG = 30.0
+HANGS_AT_DEG = 90.0
+
+
+@register
+class Picky(AdaptiveIntegrator):
+    name: ClassVar[str] = "test_picky"
+    family: ClassVar[str] = "test"
+    order: ClassVar[None] = None
+    reference: ClassVar[str] = "tests/test_ensembles.py"
+
+    def _solve(self, problem, *, step_s, tol, monitor):
+        azimuth = problem.params.release_azimuth_deg
+        if azimuth == DIVERGES_AT_DEG:
+            return Solution.failure(problem.t_out, "left the sphere", status="diverged")
+        while azimuth == HANGS_AT_DEG:  # holds the GIL: only ending the process stops it
+            pass
+        return get_integrator("dop853").solve(problem, tol=tol, monitor=monitor)
+'''
+
+
+HANG_LIMIT_S = 15.0
+"""The time limit of the hanging batch: above the 30-s scene's dop853 run with a cold compile cache on a loaded
+2-core machine (5 s was too short at load average 19), and what the test waits twice (batch, then alone)."""
+
+
+@pytest.fixture
+def picky_plugin(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
+    """An importable plug-in module (workers get the parent's sys.path), removed again after the test."""
+    from foucault_bench.integrators import unregister
+
+    module_name = f"picky_integrator_{tmp_path.name}"
+    (tmp_path / f"{module_name}.py").write_text(PICKY, encoding="utf-8")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    yield module_name
+    unregister("test_picky")
+    sys.modules.pop(module_name, None)
+
+
+def test_a_diverging_or_hanging_member_is_its_own_row_and_the_others_keep_theirs(tmp_path: Path,
+                                                                                 picky_plugin: str) -> None:
+    """In one batch: the member that diverges is its row alone (diverged, no cost, as a run alone has), the two
+    that end ok are a batch of 2. With a member that hangs, the batch passes the time limit, and its members run
+    one by one: the hanging one is a timeout row, the others are ok rows timed alone."""
+    from foucault_bench.bench.run.runner import run_matrix
+    from foucault_bench.bench.run.store import ResultsStore
+
+    document = {"integrators": ["test_picky"], "tol": [1e-6], "plugins": [picky_plugin],
+                "scene": {"fan": {"base": "seed_2min", "duration_s": 60.0,  # TINY's references
+                                  "ensemble": {"release_azimuth_deg": [0.0, 30.0, 60.0]}}},
+                "timing": {"min_repeats": 1, "max_repeats": 1, "run_timeout_s": 20.0}}
+    with ResultsStore(tmp_path / "diverges.sqlite") as store:
+        run_matrix(parse_matrix(document, source="picky"), store, jobs=1, progress=False)
+    rows = {row["scene"]: row for row in stored_rows(tmp_path / "diverges.sqlite")}
+    assert rows["fan.az30"]["status"] == "diverged" and rows["fan.az30"]["message"] == "left the sphere"
+    assert rows["fan.az30"]["batch_members"] is None and rows["fan.az30"]["cpu_time_s"] is None
+    for name in ("fan.az0", "fan.az60"):
+        assert rows[name]["status"] == "ok" and rows[name]["batch_members"] == 2 and rows[name]["cpu_time_s"] > 0
+    hanging = {**document, "scene": {"fan": {**document["scene"]["fan"],
+                                             "ensemble": {"release_azimuth_deg": [0.0, 90.0]}}},
+               "timing": {**document["timing"], "run_timeout_s": HANG_LIMIT_S}}
+    with ResultsStore(tmp_path / "hangs.sqlite") as store:
+        run_matrix(parse_matrix(hanging, source="picky"), store, jobs=1, progress=False)
+    rows = {row["scene"]: row for row in stored_rows(tmp_path / "hangs.sqlite")}
+    assert rows["fan.az90"]["status"] == "timeout" and f"{HANG_LIMIT_S:g} s" in rows["fan.az90"]["message"]
+    assert rows["fan.az0"]["status"] == "ok" and rows["fan.az0"]["batch_members"] is None
 
 
 def test_advise_worst_refuses_a_scene_that_is_no_ensemble(tmp_path: Path) -> None:
@@ -300,15 +433,16 @@ def test_advise_worst_refuses_a_scene_that_is_no_ensemble(tmp_path: Path) -> Non
 
 
 def test_a_version_4_database_gets_the_ensemble_columns(tmp_path: Path) -> None:
-    """Schema 4 → 5: the runs table gains ensemble, ensemble_member and ensemble_setting, NULL in the old rows
-    (none of which was an ensemble member), and the file records version 5."""
+    """Schema 4 → now: the runs table gains ensemble, ensemble_member, ensemble_setting and batch_members, NULL
+    in the old rows (none of which was an ensemble member or timed in a batch), and the file records the present
+    version."""
     from foucault_bench.bench.run.store import ResultsStore
     from foucault_bench.bench.schema import COLUMNS, MIGRATIONS, SCHEMA_VERSION
 
     added = ("ensemble", "ensemble_member", "ensemble_setting")
-    assert SCHEMA_VERSION == 5 and all(name in MIGRATIONS[4] for name in added)
+    assert all(name in MIGRATIONS[4] for name in added) and "batch_members" in MIGRATIONS[4]
     path = tmp_path / "v4.sqlite"
-    old = [f"{column.name} {column.sql_type}" for column in COLUMNS if column.name not in added]
+    old = [f"{column.name} {column.sql_type}" for column in COLUMNS if column.name not in (*added, "batch_members")]
     with sqlite3.connect(path) as connection:
         connection.execute(f"CREATE TABLE runs ({', '.join(old)}, PRIMARY KEY (matrix_id, run_key))")
         connection.execute("CREATE TABLE matrix_runs (matrix_id TEXT PRIMARY KEY, matrix_name TEXT, matrix_hash TEXT, "
@@ -320,13 +454,13 @@ def test_a_version_4_database_gets_the_ensemble_columns(tmp_path: Path) -> None:
         connection.execute("PRAGMA user_version = 4")
     connection.close()
     with ResultsStore(path, create=False) as store:
-        assert store.schema_version == 5
+        assert store.schema_version == SCHEMA_VERSION
         row = store.frame().iloc[0]
-    assert all(row[name] is None or row[name] != row[name] for name in added)
+    assert all(row[name] is None or row[name] != row[name] for name in (*added, "batch_members"))
     with sqlite3.connect(path) as connection:
         stored = {line[1] for line in connection.execute("PRAGMA table_info(runs)")}
     connection.close()
-    assert set(added) <= stored
+    assert {*added, "batch_members"} <= stored
 
 
 def test_members_get_no_scene_page_or_recommendation_of_their_own(database: Path) -> None:

@@ -54,6 +54,9 @@ def run_record(row: pd.Series, metric: str, cost: str) -> dict[str, Any]:
     record.update({metric: number(metric), "cost_s": number(cost), "wall_time_s": number("wall_time_s"),
                    "cpu_time_s": number("cpu_time_s"), "nfev": number("nfev"), "steps": number("steps"),
                    "matrix_id": row["matrix_id"]})
+    members = number("batch_members")
+    if members is not None:  # an ensemble member timed in a batch: its costs are an equal share of the batch's
+        record["batch_members"] = int(members)
     return record
 
 

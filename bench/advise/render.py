@@ -15,11 +15,13 @@ TAYLOR_FAMILY = "taylor"
 
 def _cost_text(record: dict[str, Any], cost: str) -> str:
     """``CPU time 1.2 ms, 4000 RHS evaluations``; for the taylor family (heyoka), whose ``nfev`` counts Taylor
-    steps (``bench.schema``), ``…, 300 Taylor steps``."""
+    steps (``bench.schema``), ``…, 300 Taylor steps``; for a run timed in an ensemble's batch
+    (``batch_members``), ``CPU time 1.2 ms (1/37 of its batch's), …``."""
     kind = "CPU time" if cost == "cpu_time_s" else "wall time"
+    share = f" (1/{record['batch_members']} of its batch's)" if record.get("batch_members") else ""
     counted = "Taylor steps" if record.get("family") == TAYLOR_FAMILY else "RHS evaluations"
     evaluations = f", {record['nfev']:.0f} {counted}" if record.get("nfev") is not None else ""
-    return f"{kind} {record['cost_s'] * 1e3:.3g} ms{evaluations}"
+    return f"{kind} {record['cost_s'] * 1e3:.3g} ms{share}{evaluations}"
 
 
 def _run_text(record: dict[str, Any], metric: str, cost: str) -> str:

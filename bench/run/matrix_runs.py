@@ -16,7 +16,7 @@ from typing import Any
 from foucault_bench.bench.problems.ensemble import member_columns
 from foucault_bench.bench.problems.reference import REFERENCE_INTEGRATOR, physics_identity
 from foucault_bench.bench.problems.scene import Scene
-from foucault_bench.bench.provenance import code_version, digest
+from foucault_bench.bench.provenance import code_version, digest, ensemble_code_version
 from foucault_bench.bench.run.timing import TimingPolicy
 from foucault_bench.bench.schema import declared_facts, setting_label
 from foucault_bench.bench.validation import (
@@ -162,7 +162,7 @@ def runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timi
     runs: list[RunSpec] = []
     if known_later:
         return runs
-    code = code_version(tuple(plugins))
+    code, ensemble_code = code_version(tuple(plugins)), ensemble_code_version(tuple(plugins))
     for integrator in integrators:
         right, wrong = _setting_keys(integrator)
         kind = "adaptive (give tol)" if integrator.adaptive else "a fixed-step method (give kh)"
@@ -187,7 +187,7 @@ def runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timi
                     tol=tol,
                     plugins=tuple(plugins),
                     timing=timing,
-                    code_version=code,
+                    code_version=ensemble_code if scene.ensemble else code,
                     declared=declared + member_columns(scene, setting_label(kh, tol)),
                 ))
     for key in shared:

@@ -8,7 +8,10 @@ Order of work (``run_matrix``):
    stored in the ``adequacy`` table; a scene whose reference cannot be computed has all its runs stored as
    ``failed`` rows with the reason;
 3. every run, in the workers (``bench.run.execute.execute_run``: the timed ``solve``, then the verdicts); the
-   row is written as soon as the run finishes.
+   row is written as soon as the run finishes. The members of an ensemble that share an integrator and a
+   setting run first, as one task and one timed batch (``bench.run.ensemble_jobs.run_members``: one row per
+   member, its cost an equal share of the batch's); a batch past the per-run time limit, or whose worker
+   died, gives no rows, and its members then run one by one, each under the limit.
 
 Nothing is lost when one run fails (bench/README.md, "Nothing is lost"):
 
@@ -38,12 +41,11 @@ from __future__ import annotations
 
 import collections
 import contextlib
-import itertools
 import os
 import signal
 import sys
 import threading
-from typing import TYPE_CHECKING, Any, Iterator, cast
+from typing import TYPE_CHECKING, Any, Callable, Iterator, cast
 
 from tqdm import tqdm
 
@@ -53,6 +55,7 @@ from foucault_bench.bench.run.execute import (
     STATUS_FAILED, checked_row, execute_run, prepare_scene, run_failure, scene_failure,
 )
 from foucault_bench.bench.run.dask_executor import DaskExecutor
+from foucault_bench.bench.run.ensemble_jobs import batch_failure, configurations, run_members
 from foucault_bench.bench.run.executors import Executor
 from foucault_bench.bench.run.local_executor import LocalExecutor
 from foucault_bench.bench.schema import STATUS_TIMEOUT
@@ -203,13 +206,9 @@ def compile_first(specs: list[RunSpec]) -> tuple[list[RunSpec], list[RunSpec]]:
 def _execute_runs(executor, specs: list[RunSpec], matrix: Matrix, store: ResultsStore, matrix_id: str,
                   progress: bool, already: int) -> None:
     counts = collections.Counter(failed=already)
-    results = itertools.chain.from_iterable(
-        executor.map_unordered(execute_run, [(spec, matrix_id) for spec in group], run_failure,
-                               timeout_s=matrix.run_timeout_s)
-        for group in compile_first(specs))
     with tqdm(total=len(specs), desc=f"{matrix.name} runs", unit="run", disable=not progress,
               file=sys.stderr) as bar:
-        for (spec, _), row in results:
+        for spec, row in _rows(executor, specs, matrix, matrix_id, note=bar.write):
             row = checked_row(row, spec, matrix_id)
             store.write_run(row)
             counts[row["status"]] += 1
@@ -219,6 +218,33 @@ def _execute_runs(executor, specs: list[RunSpec], matrix: Matrix, store: Results
     lost = getattr(executor, "lost_runs", 0)
     if lost:
         raise RunInterrupted(f"{lost} run(s) were lost with their Dask workers (not stored; `--resume` runs them)")
+
+
+def _rows(executor, specs: list[RunSpec], matrix: Matrix, matrix_id: str,
+          note: Callable[[str], object]) -> Iterator[tuple[RunSpec, Any]]:
+    """``(spec, row)`` of every run as it arrives: first the ensembles' configurations, each one batch task
+    (``bench.run.ensemble_jobs.run_members``, the cheapest of each compile key first), then every other run
+    alone (``execute_run``, ``compile_first``), then one by one the members of batches that gave no rows (past
+    the time limit, their worker died)."""
+    batches = list(configurations(specs).values())
+    by_first = {id(members[0]): members for members in batches}
+    alone: list[RunSpec] = []
+    for group in compile_first([members[0] for members in batches]) if batches else ():
+        tasks = [(by_first[id(spec)], matrix_id) for spec in group]
+        for (members, _), rows in executor.map_unordered(run_members, tasks, batch_failure,
+                                                         timeout_s=matrix.run_timeout_s):
+            if isinstance(rows, list) and len(rows) == len(members):
+                yield from zip(members, rows, strict=True)
+            else:
+                note(f"the batch of {len(members)} members of {members[0].scene.ensemble} ({members[0].integrator} "
+                     f"{members[0].setting}) gave no rows (time limit or worker lost): its members run one by one")
+                alone.extend(members)
+    plain = [spec for spec in specs if not spec.scene.ensemble]
+    for group in [*compile_first(plain), alone]:
+        if group:
+            for (spec, _), row in executor.map_unordered(execute_run, [(spec, matrix_id) for spec in group],
+                                                         run_failure, timeout_s=matrix.run_timeout_s):
+                yield spec, row
 
 
 def make_executor(jobs: int, scheduler: str | None = None) -> Executor:
