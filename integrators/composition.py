@@ -112,7 +112,7 @@ class VerletComposition(FixedStepIntegrator):
     composition: ClassVar[Composition]
     remainder_sweeps: ClassVar[int] = 2
     """Fixed-point sweeps of the Verlet step's implicit half kick on a model with a velocity-dependent remainder
-    (``verlet_sequence``): the composition has its order only if its base step is symmetric to beyond it."""
+    (``verlet_sequences``): the composition has its order only if its base step is symmetric to beyond it."""
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)

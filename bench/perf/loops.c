@@ -19,7 +19,7 @@
  *   - four scalar doubles of state, two nested loops (output rows, steps per row: no modulo per step), the
  *     divergence test after every step, the state written to `out` once per row;
  *   - sqrt, not pow(x, 0.5).
- * The numba steps compute the same way (integrators/methods/verlet.py verlet_sequence), so the states stay bitwise equal.
+ * The numba steps compute the same way (integrators/methods/verlet.py verlet_sequences), so the states stay bitwise equal.
  *
  * Each (model, scheme) pair exports two functions:
  *   fb_<model>_<scheme>(state0, p, h, n_steps, stride, out, radius_bound, steps_done) -> status
@@ -37,7 +37,7 @@
 typedef struct {
     double g, length, k2, wx, wy, wz, c;  /* models/parameters.py PARAMETER_VECTOR_NAMES */
     double k;                             /* sqrt(k2): the Gauss solves' norm */
-    /* Verlet sequences (integrators/methods/verlet.py verlet_sequence): sub-steps gamma_i h and the merged rotations */
+    /* Verlet sequences (integrators/methods/verlet.py verlet_sequences): sub-steps gamma_i h and the merged rotations */
     double sub_h[MAX_SUB_STEPS];
     double tan_r[MAX_ROTATIONS], sin_r[MAX_ROTATIONS]; /* plane: rotation by -c_i a h about z (shears) */
     double rot[MAX_ROTATIONS][9];                              /* sphere: rotation by -c_i |w| h, row-major */
@@ -257,7 +257,7 @@ DEFINE_KICK(spherical, k->wx, k->wy)
 DEFINE_RUNGE_KUTTA_STEPS(linear)
 DEFINE_RUNGE_KUTTA_STEPS(spherical)
 
-/* ---- Verlet sequences (integrators/methods/verlet.py verlet_sequence): Verlet, yoshida4, composition6 ---- */
+/* ---- Verlet sequences (integrators/methods/verlet.py verlet_sequences): Verlet, yoshida4, composition6 ---- */
 
 /* plane: canonical p = v + a z x r; per sub-step the merged rotation then kick, drift, kick */
 /* verlet.py _plane_parts turn: the rotation as three shears of r and their inverse transposes on p */

@@ -31,11 +31,13 @@ kick–drift–kick part is then the composition of a first-order map with its a
 but no longer symplectic (that model has no symplectic structure to keep). 2 force evaluations per step
 (the first kick of a step cannot reuse the last kick of the previous one because R(h/2) turns r in between).
 
-``verlet_sequence`` builds the step for a sequence of sub-steps γ_1 h … γ_s h (the compositions of
+``verlet_sequences`` builds the step for a sequence of sub-steps γ_1 h … γ_s h (the compositions of
 ``integrators.composition``; one Verlet step is γ = (1,)): the state stays in the canonical variables from the
 first sub-step to the last, and the two half rotations between neighbouring sub-steps are one rotation (both
 turn about ω_c, so their angles add). That is the same map as s separate Verlet steps, with s − 1 fewer
-rotations and variable changes.
+rotations and variable changes. The rotations and sub-step sizes depend on p and h alone: a setup computes them
+once per run into a small table, and the step is one compiled sub-step body in a loop over that table, so a
+35-sub-step composition compiles in the time of one sub-step (bench/PERF.md "The compositions' compile time").
 """
 
 import math
