@@ -37,15 +37,16 @@ from typing import Callable, ClassVar
 import numpy as np
 
 from foucault_bench.integrators.fixed_step import FixedStepIntegrator
-from foucault_bench.integrators.methods.verlet import RotatingVerlet, verlet_sequence
+from foucault_bench.integrators.fixed_step import with_setup
+from foucault_bench.integrators.methods.verlet import RotatingVerlet, verlet_sequences
 from foucault_bench.models import Model
-from foucault_bench.models.jit import jit
 
-MAX_COMPILED_SUB_STEPS = 9
-"""Sub-steps per ``verlet_sequence``: a longer composition is compiled as consecutive sequences of at most this
-many sub-steps (the same map to round-off: one extra change of variables and one split rotation per sequence).
-numba's compile time grows steeply with the length of one sequence (its tuple of rotations): 35 sub-steps in one
-sequence did not compile within 4 minutes, 9 compile in seconds."""
+SEQUENCE_SUB_STEPS = 9
+"""Sub-steps per sequence in the canonical variables (``verlet_sequences``): a longer composition returns to
+(x, y, vx, vy) after every 9 sub-steps, which is the same map to round-off (one extra change of variables and
+one split rotation per sequence). Kept so that ``composition8`` and ``composition10`` give bitwise the results
+of the earlier code, which had to compile its sequences unrolled (35 sub-steps in one did not compile within 4
+minutes); the loop over the sub-steps compiles any length in the time of one."""
 
 POWER_SUM_TOLERANCE = 1e-14
 """How far from zero an order condition (and from one Σγ) may be, per stage and times max(1, max|γ|) to the
@@ -111,7 +112,7 @@ class VerletComposition(FixedStepIntegrator):
     composition: ClassVar[Composition]
     remainder_sweeps: ClassVar[int] = 2
     """Fixed-point sweeps of the Verlet step's implicit half kick on a model with a velocity-dependent remainder
-    (``verlet_sequence``): the composition has its order only if its base step is symmetric to beyond it."""
+    (``verlet_sequences``): the composition has its order only if its base step is symmetric to beyond it."""
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
@@ -121,26 +122,10 @@ class VerletComposition(FixedStepIntegrator):
             cls.stability_limit_kh = cls.composition.oscillator_stability_limit()
 
     def make_step(self, model: Model) -> Callable:
-        weights = tuple(float(g) for g in self.composition.weights)
-        chunks = [verlet_sequence(model, weights[start:start + MAX_COMPILED_SUB_STEPS], self.remainder_sweeps)
-                  for start in range(0, len(weights), MAX_COMPILED_SUB_STEPS)]
-        return _in_turn(tuple(chunks))
+        return with_setup(*self.make_setup_step(model))
 
-
-def _in_turn(steps: tuple[Callable, ...]) -> Callable:
-    """A numba step ``(x, y, vx, vy, h, p)`` applying ``steps`` one after the other (built by nesting, so that
-    each is inlined)."""
-    first = steps[0]
-    if len(steps) == 1:
-        return first
-    rest = _in_turn(steps[1:])
-
-    @jit(inline="always")
-    def step(x, y, vx, vy, h, p):
-        x, y, vx, vy = first(x, y, vx, vy, h, p)
-        return rest(x, y, vx, vy, h, p)
-
-    return step
+    def make_setup_step(self, model: Model) -> tuple[Callable, Callable]:
+        return verlet_sequences(model, self.composition.weights, SEQUENCE_SUB_STEPS, self.remainder_sweeps)
 
 
 Word = tuple[int, ...]

@@ -92,6 +92,24 @@ def compensated_add(total, increment, compensation):
     return new_total, compensation + (total - new_total)
 
 
+@jit(inline="always")
+def _parameters(h, p):
+    """The setup of a scheme without one: its step takes the parameters themselves."""
+    return p
+
+
+def with_setup(setup: Callable, step: Callable) -> Callable:
+    """The step ``(x, y, vx, vy, h, p) -> new state`` of a scheme whose step takes the constants ``setup(h, p)``
+    computes in place of p (``FixedStepIntegrator.make_setup_step``): here computed at every call, which a
+    one-step analysis can afford and a loop cannot."""
+
+    @jit(inline="always")
+    def standalone(x, y, vx, vy, h, p):
+        return step(x, y, vx, vy, h, setup(h, p))
+
+    return standalone
+
+
 def state_plus(increment: Callable) -> Callable:
     """The step ``(x, y, vx, vy, h, p) -> new state`` of a scheme given by its ``increment`` (plain sums)."""
 
@@ -128,10 +146,14 @@ def _advance(step: Callable, increment: Callable | None) -> Callable:
     return compensated
 
 
-def build_kernel(step: Callable, energy: Callable, increment: Callable | None = None) -> Callable:
+def build_kernel(step: Callable, energy: Callable, increment: Callable | None = None,
+                 setup: Callable | None = None) -> Callable:
     """Compile the fixed-step loop around ``step`` with the model's ``energy`` for streamed metrics; with the
-    scheme's ``increment`` the state is advanced by it with compensated summation (module docstring)."""
+    scheme's ``increment`` the state is advanced by it with compensated summation (module docstring); with the
+    scheme's ``setup`` (``FixedStepIntegrator.make_setup_step``) the step and the increment take ``setup(h, p)``,
+    computed once before the first step, in place of p."""
     advance = _advance(step, increment)
+    prepare = _parameters if setup is None else setup
 
     @jit
     def kernel(state0, parameter_vector, h, n_steps, stride, out, monitor, turning, radius_bound):
@@ -139,6 +161,7 @@ def build_kernel(step: Callable, energy: Callable, increment: Callable | None = 
         # The parameters as a tuple of scalars: unlike array elements they cannot alias the output arrays
         # written in the loop, so LLVM hoists what the step computes from p and h alone out of the loop.
         p = to_fixed_tuple(parameter_vector, PARAMETER_COUNT)
+        constants = prepare(h, p)
         x = state0[0]
         y = state0[1]
         vx = state0[2]
@@ -168,7 +191,7 @@ def build_kernel(step: Callable, energy: Callable, increment: Callable | None = 
         # one output row per ``stride`` steps: two nested loops, no modulo per step (as a C programmer writes it)
         for row in range(1, n_steps // stride + 1):
             for _ in range(stride):
-                xn, yn, vxn, vyn, compensation = advance(x, y, vx, vy, compensation, h, p)
+                xn, yn, vxn, vyn, compensation = advance(x, y, vx, vy, compensation, h, constants)
                 r2 = xn * xn + yn * yn
                 if not (r2 <= bound2) or not (abs(vxn) + abs(vyn) < 1.0e300):
                     status = 1
@@ -234,6 +257,13 @@ class FixedStepIntegrator(Integrator):
         """A numba function ``(x, y, vx, vy, h, p) -> (x, y, vx, vy)`` advancing the model's state by h (``p``:
         the parameter vector, passed by the loop as a tuple of floats; compile it with ``models.jit.jit``)."""
 
+    def make_setup_step(self, model: Model) -> tuple[Callable, Callable] | None:
+        """For a scheme whose step needs constants computed from h and the parameters alone (a composition's
+        rotations and sub-step sizes): ``(setup, step)``, ``setup(h, p)`` a numba function the loop calls once
+        per run and ``step(x, y, vx, vy, h, constants)`` taking its result in place of p (``make_step`` is then
+        ``with_setup(setup, step)``). ``None`` (the default): the loop runs ``make_step``'s step on p itself."""
+        return None
+
     def make_increment(self, model: Model) -> Callable | None:
         """For a scheme whose step is best written as an increment: a numba function ``(x, y, vx, vy, h, p) ->
         (dx, dy, dvx, dvy)``, which the loop adds to the state with compensated summation (``None``: the loop
@@ -246,9 +276,17 @@ class FixedStepIntegrator(Integrator):
         return self.make_step(model)
 
     @functools.lru_cache(maxsize=None)
+    def loop_step(self, model: Model) -> tuple[Callable, Callable | None]:
+        """``(step, setup)`` as the loop runs them, built once per model: ``make_setup_step``'s pair, or
+        ``compiled_step`` and no setup."""
+        prepared = self.make_setup_step(model)
+        return (self.compiled_step(model), None) if prepared is None else (prepared[1], prepared[0])
+
+    @functools.lru_cache(maxsize=None)
     def kernel(self, model: Model) -> Callable:
         """The compiled loop for this scheme and model (compiled on first use, cached on disk by numba)."""
-        return build_kernel(self.compiled_step(model), model.numba_energy, self.make_increment(model))
+        step, setup = self.loop_step(model)
+        return build_kernel(step, model.numba_energy, self.make_increment(model), setup)
 
     @functools.lru_cache(maxsize=None)
     def evaluations_per_step(self, model: Model) -> float:

@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 from foucault_bench.integrators import Problem, get_integrator
+from foucault_bench.integrators.composition import SEQUENCE_SUB_STEPS, VerletComposition
+from foucault_bench.integrators.methods.verlet import rotation_coefficients, verlet_parts
 from foucault_bench.models import MODELS, PendulumParameters
 from foucault_bench.bench.studies import ReleaseAzimuthConfig, precession_vs_release_azimuth
 
@@ -82,7 +84,7 @@ def test_verlet_precession_error_on_the_sphere_depends_on_the_release_direction(
 @pytest.mark.parametrize("name", ["yoshida4", "composition6", "composition8", "composition10"])
 def test_a_composition_step_is_its_verlet_sub_steps_in_a_row(model: str, name: str) -> None:
     """A composition step merges the half rotations of neighbouring sub-steps and stays in canonical variables
-    (``verlet_sequence``); it must be the same map as the Verlet steps γ₁h, …, γₛh taken one after the other,
+    (``verlet_sequences``); it must be the same map as the Verlet steps γ₁h, …, γₛh taken one after the other,
     to round-off. Released off-axis with a sideways velocity, so that every component of the state moves."""
     composition = get_integrator(name)
     step = composition.compiled_step(MODELS[model])
@@ -96,3 +98,38 @@ def test_a_composition_step_is_its_verlet_sub_steps_in_a_row(model: str, name: s
     composed = step(*state, h, p)
     scale = np.array([3.0, 3.0, 3.0 * PARIS.pendulum_frequency_rad_s, 3.0 * PARIS.pendulum_frequency_rad_s])
     assert np.all(np.abs(np.subtract(composed, in_a_row)) <= 1e-14 * scale)
+
+
+@pytest.mark.parametrize("model", sorted(MODELS))
+@pytest.mark.parametrize("name", ["verlet", "yoshida4", "composition6", "composition8", "composition10"])
+def test_the_sub_step_loop_is_the_sub_steps_written_out(model: str, name: str) -> None:
+    """The compiled step runs one sub-step body in a loop over a table of rotations and sub-step sizes computed
+    once per run (``verlet_sequences``); it must compute bitwise what the sub-steps give written out one by one,
+    each rotation computed where it is used: per sequence of ``SEQUENCE_SUB_STEPS``, the change to canonical
+    variables, the merged rotations R(c_i h) between kick–drift–kicks of γ_i h, and the change back. Checked for
+    the step alone (its table computed at each call) and for three steps of the fixed-step loop."""
+    integrator = get_integrator(name)
+    weights = integrator.composition.weights if isinstance(integrator, VerletComposition) else (1.0,)
+    parts = verlet_parts(MODELS[model], getattr(integrator, "remainder_sweeps", 2))
+    p = tuple(PARIS.parameter_vector())
+    h = 0.3 / PARIS.pendulum_frequency_rad_s
+
+    def written_out(x: float, y: float, vx: float, vy: float) -> tuple[float, float, float, float]:
+        for first in range(0, len(weights), SEQUENCE_SUB_STEPS):
+            sequence = weights[first:first + SEQUENCE_SUB_STEPS]
+            coefficients = rotation_coefficients(sequence)
+            q = parts.to_canonical(x, y, vx, vy, p)
+            for gamma, c in zip(sequence, coefficients[:-1], strict=True):
+                q = parts.kick_drift_kick(parts.turn(parts.rotation(c, h, p), q), gamma * h, p)
+            x, y, vx, vy = parts.from_canonical(parts.turn(parts.rotation(coefficients[-1], h, p), q), p)
+        return x, y, vx, vy
+
+    state = (2.0, 1.5, 0.1, -0.2)
+    expected = [state]
+    for _ in range(3):
+        expected.append(written_out(*expected[-1]))
+    assert np.array(integrator.compiled_step(MODELS[model])(*state, h, p)).tobytes() == np.array(expected[1]).tobytes()
+    out = np.full((4, 4), np.nan)
+    integrator.kernel(MODELS[model])(np.array(state), PARIS.parameter_vector(), h, 3, 1, out, False, np.empty((0, 3)),
+                                     1e3 * PARIS.length_m)
+    assert out.tobytes() == np.array(expected).tobytes()

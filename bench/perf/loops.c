@@ -19,7 +19,7 @@
  *   - four scalar doubles of state, two nested loops (output rows, steps per row: no modulo per step), the
  *     divergence test after every step, the state written to `out` once per row;
  *   - sqrt, not pow(x, 0.5).
- * The numba steps compute the same way (integrators/methods/verlet.py verlet_sequence), so the states stay bitwise equal.
+ * The numba steps compute the same way (integrators/methods/verlet.py verlet_sequences), so the states stay bitwise equal.
  *
  * Each (model, scheme) pair exports two functions:
  *   fb_<model>_<scheme>(state0, p, h, n_steps, stride, out, radius_bound, steps_done) -> status
@@ -31,15 +31,16 @@
 #include <math.h>
 #include <stdint.h>
 
-#define MAX_SUB_STEPS 9 /* composition6 */
+#define MAX_SUB_STEPS 35 /* composition10 */
+#define MAX_ROTATIONS 39 /* composition10: 4 sequences (SEQUENCE_SUB_STEPS below), each one rotation more than sub-steps */
 
 typedef struct {
     double g, length, k2, wx, wy, wz, c;  /* models/parameters.py PARAMETER_VECTOR_NAMES */
     double k;                             /* sqrt(k2): the Gauss solves' norm */
-    /* Verlet sequences (integrators/methods/verlet.py verlet_sequence): sub-steps gamma_i h and the merged rotations */
+    /* Verlet sequences (integrators/methods/verlet.py verlet_sequences): sub-steps gamma_i h and the merged rotations */
     double sub_h[MAX_SUB_STEPS];
-    double tan_r[MAX_SUB_STEPS + 1], sin_r[MAX_SUB_STEPS + 1]; /* plane: rotation by -c_i a h about z (shears) */
-    double rot[MAX_SUB_STEPS + 1][9];                          /* sphere: rotation by -c_i |w| h, row-major */
+    double tan_r[MAX_ROTATIONS], sin_r[MAX_ROTATIONS]; /* plane: rotation by -c_i a h about z (shears) */
+    double rot[MAX_ROTATIONS][9];                              /* sphere: rotation by -c_i |w| h, row-major */
     double cos_boris, sin_boris;                               /* plane Boris: velocity turned by -2 a h */
 } consts;
 
@@ -70,15 +71,16 @@ static void rotation_matrix(const consts *k, double c, double h, double *r) {
     r[6] = u * nz * nx - sin_a * ny; r[7] = u * nz * ny + sin_a * nx; r[8] = cos_a + u * nz * nz;
 }
 
-/* integrators/methods/verlet.py rotation_coefficients: c_0 = g_1/2, c_i = (g_i + g_(i+1))/2, c_n = g_n/2 */
-static void sequence_setup(consts *k, double h, const double *gamma, int n) {
-    for (int i = 0; i < n; i++) k->sub_h[i] = gamma[i] * h;
+/* integrators/methods/verlet.py rotation_coefficients: c_0 = g_1/2, c_i = (g_i + g_(i+1))/2, c_n = g_n/2; the
+ * sequence's sub-steps stored from sub_h[step0], its rotations from row row0 */
+static void sequence_setup(consts *k, double h, const double *gamma, int step0, int row0, int n) {
+    for (int i = 0; i < n; i++) k->sub_h[step0 + i] = gamma[i] * h;
     for (int i = 0; i <= n; i++) {
         double c = i == 0 ? 0.5 * gamma[0] : (i == n ? 0.5 * gamma[n - 1] : 0.5 * (gamma[i - 1] + gamma[i]));
         double angle = -c * k->wz * h;
-        k->tan_r[i] = tan(0.5 * angle);
-        k->sin_r[i] = sin(angle);
-        rotation_matrix(k, c, h, k->rot[i]);
+        k->tan_r[row0 + i] = tan(0.5 * angle);
+        k->sin_r[row0 + i] = sin(angle);
+        rotation_matrix(k, c, h, k->rot[row0 + i]);
     }
 }
 
@@ -91,9 +93,9 @@ static const double COMPOSITION6[9] = {
     -0.70624617255763935980996482, 0.33259913678935943859974864, 0.39216144400731413927925056};
 static const double VERLET[1] = {1.0};
 
-static void verlet_setup(consts *k, double h) { sequence_setup(k, h, VERLET, 1); }
-static void yoshida4_setup(consts *k, double h) { sequence_setup(k, h, YOSHIDA4, 3); }
-static void composition6_setup(consts *k, double h) { sequence_setup(k, h, COMPOSITION6, 9); }
+static void verlet_setup(consts *k, double h) { sequence_setup(k, h, VERLET, 0, 0, 1); }
+static void yoshida4_setup(consts *k, double h) { sequence_setup(k, h, YOSHIDA4, 0, 0, 3); }
+static void composition6_setup(consts *k, double h) { sequence_setup(k, h, COMPOSITION6, 0, 0, 9); }
 static void boris_setup(consts *k, double h) {
     k->cos_boris = cos(-2.0 * k->wz * h);
     k->sin_boris = sin(-2.0 * k->wz * h);
@@ -255,7 +257,7 @@ DEFINE_KICK(spherical, k->wx, k->wy)
 DEFINE_RUNGE_KUTTA_STEPS(linear)
 DEFINE_RUNGE_KUTTA_STEPS(spherical)
 
-/* ---- Verlet sequences (integrators/methods/verlet.py verlet_sequence): Verlet, yoshida4, composition6 ---- */
+/* ---- Verlet sequences (integrators/methods/verlet.py verlet_sequences): Verlet, yoshida4, composition6 ---- */
 
 /* plane: canonical p = v + a z x r; per sub-step the merged rotation then kick, drift, kick */
 /* verlet.py _plane_parts turn: the rotation as three shears of r and their inverse transposes on p */
@@ -268,12 +270,13 @@ static inline void shear_turn(double t, double s, double *x, double *y, double *
     *py += t * *px;
 }
 
-static inline void linear_sequence(const consts *k, int n, double *x_, double *y_, double *vx_, double *vy_) {
+static inline void linear_sequence(const consts *k, int step0, int row0, int n, double *x_, double *y_, double *vx_,
+                                   double *vy_) {
     double a = k->wz, x = *x_, y = *y_, fx, fy, fz;
     double px = *vx_ - a * y, py = *vy_ + a * x;
     for (int i = 0; i < n; i++) {
-        double h = k->sub_h[i];
-        shear_turn(k->tan_r[i], k->sin_r[i], &x, &y, &px, &py);
+        double h = k->sub_h[step0 + i];
+        shear_turn(k->tan_r[row0 + i], k->sin_r[row0 + i], &x, &y, &px, &py);
         linear_kick(k, x, y, 0.0, &fx, &fy, &fz);
         px += 0.5 * h * fx;
         py += 0.5 * h * fy;
@@ -283,7 +286,7 @@ static inline void linear_sequence(const consts *k, int n, double *x_, double *y
         px = px + 0.5 * h * fx;
         py = py + 0.5 * h * fy;
     }
-    shear_turn(k->tan_r[n], k->sin_r[n], &x, &y, &px, &py);
+    shear_turn(k->tan_r[row0 + n], k->sin_r[row0 + n], &x, &y, &px, &py);
     *x_ = x;
     *y_ = y;
     *vx_ = px + a * y;
@@ -301,16 +304,17 @@ static inline void rotate(const double *r, double *vx, double *vy, double *vz) {
 }
 
 /* sphere: canonical p = v + w x r in 3-D; per sub-step the merged rotation then RATTLE */
-static inline void spherical_sequence(const consts *k, int n, double *x_, double *y_, double *vx_, double *vy_) {
+static inline void spherical_sequence(const consts *k, int step0, int row0, int n, double *x_, double *y_,
+                                      double *vx_, double *vy_) {
     double wx = k->wx, wy = k->wy, wz = k->wz, length = k->length, l2 = length * length;
     double x = *x_, y = *y_, vx = *vx_, vy = *vy_, fx, fy, fz;
     double z = -sqrt(l2 - x * x - y * y);
     double vz = -(x * vx + y * vy) / z;
     double px = vx + wy * z - wz * y, py = vy + wz * x - wx * z, pz = vz + wx * y - wy * x;
     for (int i = 0; i < n; i++) {
-        double h = k->sub_h[i];
-        rotate(k->rot[i], &x, &y, &z);
-        rotate(k->rot[i], &px, &py, &pz);
+        double h = k->sub_h[step0 + i];
+        rotate(k->rot[row0 + i], &x, &y, &z);
+        rotate(k->rot[row0 + i], &px, &py, &pz);
         spherical_kick(k, x, y, z, &fx, &fy, &fz);
         double qx = x + h * (px + 0.5 * h * fx), qy = y + h * (py + 0.5 * h * fy), qz = z + h * (pz + 0.5 * h * fz);
         double qr = qx * x + qy * y + qz * z;
@@ -330,8 +334,8 @@ static inline void spherical_sequence(const consts *k, int n, double *x_, double
         pz += nu * zn;
         x = xn; y = yn; z = zn;
     }
-    rotate(k->rot[n], &x, &y, &z);
-    rotate(k->rot[n], &px, &py, &pz);
+    rotate(k->rot[row0 + n], &x, &y, &z);
+    rotate(k->rot[row0 + n], &px, &py, &pz);
     *x_ = x;
     *y_ = y;
     *vx_ = px - (wy * z - wz * y);
@@ -342,17 +346,17 @@ static inline void spherical_sequence(const consts *k, int n, double *x_, double
     static inline void model##_verlet_step(const consts *k, double h, double *x, double *y, double *vx,      \
                                            double *vy) {                                                     \
         (void)h;                                                                                              \
-        model##_sequence(k, 1, x, y, vx, vy);                                                                 \
+        model##_sequence(k, 0, 0, 1, x, y, vx, vy);                                                                 \
     }                                                                                                         \
     static inline void model##_yoshida4_step(const consts *k, double h, double *x, double *y, double *vx,    \
                                              double *vy) {                                                   \
         (void)h;                                                                                              \
-        model##_sequence(k, 3, x, y, vx, vy);                                                                 \
+        model##_sequence(k, 0, 0, 3, x, y, vx, vy);                                                                 \
     }                                                                                                         \
     static inline void model##_composition6_step(const consts *k, double h, double *x, double *y,            \
                                                  double *vx, double *vy) {                                   \
         (void)h;                                                                                              \
-        model##_sequence(k, 9, x, y, vx, vy);                                                                 \
+        model##_sequence(k, 0, 0, 9, x, y, vx, vy);                                                                 \
     }
 DEFINE_SEQUENCE_STEPS(linear)
 DEFINE_SEQUENCE_STEPS(spherical)
@@ -678,3 +682,60 @@ DEFINE_LOOPS(spherical, composition6)
 DEFINE_LOOPS(spherical, boris)
 DEFINE_LOOPS(spherical, implicit_midpoint)
 DEFINE_LOOPS(spherical, gauss_legendre4)
+
+/* ---- composition8 and composition10 (integrators/methods/composition8.py, composition10.py): 15 and 35
+ * sub-steps taken as consecutive sequences of at most SEQUENCE_SUB_STEPS (integrators/composition.py), each in
+ * the canonical variables with its own merged rotations (integrators/methods/verlet.py verlet_sequences: the
+ * rotations of sequence j stored from row first + j) ---- */
+
+#define SEQUENCE_SUB_STEPS 9
+
+/* McLachlan's 15-stage order-8 weights and Sofroniou & Spaletta's s35odr10, digits as in the Python sources */
+static const double COMPOSITION8[15] = {
+    0.74167036435061295344822780, -0.40910082580003159399730010, 0.19075471029623837995387626,
+    -0.57386247111608226665638773, 0.29906418130365592384446354, 0.33462491824529818378495798,
+    0.31529309239676659663205666, -0.79688793935291635401978884, 0.31529309239676659663205666,
+    0.33462491824529818378495798, 0.29906418130365592384446354, -0.57386247111608226665638773,
+    0.19075471029623837995387626, -0.40910082580003159399730010, 0.74167036435061295344822780};
+static const double COMPOSITION10[35] = {
+    0.078795722521686419263907679337684, 0.31309610341510852776481247192647,
+    0.027918383235078066109520273275299, -0.22959284159390709415121339679655,
+    0.13096206107716486317465685927961, -0.26973340565451071434460973222411,
+    0.074973343155891435666137105641410, 0.11199342399981020488957508073640,
+    0.36613344954622675119314812353150, -0.39910563013603589787862981058340,
+    0.10308739852747107731580277001372, 0.41143087395589023782070411897608,
+    -0.0048663605831352617621956593099771, -0.39203335370863990644808193642610,
+    0.051942502962449647037182904015976, 0.050665090759924496335874344156866,
+    0.049674370639729879054568800279461, 0.049317735759594537917680008339338,
+    0.049674370639729879054568800279461, 0.050665090759924496335874344156866,
+    0.051942502962449647037182904015976, -0.39203335370863990644808193642610,
+    -0.0048663605831352617621956593099771, 0.41143087395589023782070411897608,
+    0.10308739852747107731580277001372, -0.39910563013603589787862981058340,
+    0.36613344954622675119314812353150, 0.11199342399981020488957508073640,
+    0.074973343155891435666137105641410, -0.26973340565451071434460973222411,
+    0.13096206107716486317465685927961, -0.22959284159390709415121339679655,
+    0.027918383235078066109520273275299, 0.31309610341510852776481247192647,
+    0.078795722521686419263907679337684};
+
+static inline int sequence_length(int first, int n) { return n - first < SEQUENCE_SUB_STEPS ? n - first : SEQUENCE_SUB_STEPS; }
+
+static void sequences_setup(consts *k, double h, const double *gamma, int n) {
+    for (int first = 0, j = 0; first < n; first += SEQUENCE_SUB_STEPS, j++)
+        sequence_setup(k, h, gamma + first, first, first + j, sequence_length(first, n));
+}
+static void composition8_setup(consts *k, double h) { sequences_setup(k, h, COMPOSITION8, 15); }
+static void composition10_setup(consts *k, double h) { sequences_setup(k, h, COMPOSITION10, 35); }
+
+#define DEFINE_SEQUENCES_STEP(model, scheme, n)                                                               \
+    static inline void model##_##scheme##_step(const consts *k, double h, double *x, double *y, double *vx,  \
+                                               double *vy) {                                                 \
+        (void)h;                                                                                              \
+        for (int first = 0, j = 0; first < n; first += SEQUENCE_SUB_STEPS, j++)                              \
+            model##_sequence(k, first, first + j, sequence_length(first, n), x, y, vx, vy);                   \
+    }                                                                                                         \
+    PLAIN_ADVANCE(model, scheme)                                                                              \
+    DEFINE_LOOPS(model, scheme)
+DEFINE_SEQUENCES_STEP(linear, composition8, 15)
+DEFINE_SEQUENCES_STEP(linear, composition10, 35)
+DEFINE_SEQUENCES_STEP(spherical, composition8, 15)
+DEFINE_SEQUENCES_STEP(spherical, composition10, 35)

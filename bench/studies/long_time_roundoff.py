@@ -114,7 +114,8 @@ def releases(config: RoundoffConfig, params: PendulumParameters) -> np.ndarray:
 def plain_kernel(integrator: FixedStepIntegrator) -> Callable:
     """The scheme's fixed-step loop on the linear model with plain sums for the state update."""
     model = MODELS["linear"]
-    return build_kernel(integrator.compiled_step(model), model.numba_energy)
+    step, setup = integrator.loop_step(model)
+    return build_kernel(step, model.numba_energy, setup=setup)
 
 
 def loop(integrator: FixedStepIntegrator, compensated: bool) -> Callable:

@@ -7,8 +7,9 @@ table ``ARKODE_SPRK_SOFRONIOU_10_36`` and OrdinaryDiffEq.jl's ``SofSpa10``; the 
 & Wanner, Geometric Numerical Integration, 2nd ed., §V.3.2). ``Composition`` checks every order condition up
 to 10 when the module is imported (residuals at most 2.5e-16; the largest one of order 11 is only 1.4e-6, the
 reason the errors of this method reach round-off after few halvings of the step). Stability limit on the
-oscillator: ``Composition.oscillator_stability_limit`` (≈ 5.974). Compiled as sequences of at most
-``MAX_COMPILED_SUB_STEPS`` sub-steps (``integrators.composition``).
+oscillator: ``Composition.oscillator_stability_limit`` (≈ 5.974). Taken as sequences of at most
+``SEQUENCE_SUB_STEPS`` sub-steps in the canonical variables (``integrators.composition``), one compiled sub-step
+body in a loop (``integrators.methods.verlet.verlet_sequences``).
 """
 
 from typing import ClassVar

@@ -31,18 +31,23 @@ kick–drift–kick part is then the composition of a first-order map with its a
 but no longer symplectic (that model has no symplectic structure to keep). 2 force evaluations per step
 (the first kick of a step cannot reuse the last kick of the previous one because R(h/2) turns r in between).
 
-``verlet_sequence`` builds the step for a sequence of sub-steps γ_1 h … γ_s h (the compositions of
+``verlet_sequences`` builds the step for a sequence of sub-steps γ_1 h … γ_s h (the compositions of
 ``integrators.composition``; one Verlet step is γ = (1,)): the state stays in the canonical variables from the
 first sub-step to the last, and the two half rotations between neighbouring sub-steps are one rotation (both
 turn about ω_c, so their angles add). That is the same map as s separate Verlet steps, with s − 1 fewer
-rotations and variable changes.
+rotations and variable changes. The rotations and sub-step sizes depend on p and h alone: a setup computes them
+once per run into a small table, and the step is one compiled sub-step body in a loop over that table, so a
+35-sub-step composition compiles in the time of one sub-step (bench/PERF.md "The compositions' compile time").
 """
 
 import math
 from dataclasses import dataclass
 from typing import Callable, ClassVar
 
-from foucault_bench.integrators.fixed_step import FixedStepIntegrator
+import numpy as np
+from numba.np.unsafe.ndarray import to_fixed_tuple
+
+from foucault_bench.integrators.fixed_step import FixedStepIntegrator, with_setup
 from foucault_bench.integrators.registry import register
 from foucault_bench.models import Model
 from foucault_bench.models.jit import jit
@@ -63,7 +68,10 @@ class RotatingVerlet(FixedStepIntegrator):
     )
 
     def make_step(self, model: Model) -> Callable:
-        return verlet_sequence(model, (1.0,))
+        return with_setup(*self.make_setup_step(model))
+
+    def make_setup_step(self, model: Model) -> tuple[Callable, Callable]:
+        return verlet_sequences(model, (1.0,), 1)
 
 
 @dataclass(frozen=True)
@@ -73,6 +81,7 @@ class _Parts:
 
     to_canonical: Callable  # (x, y, vx, vy, p) -> q
     rotation: Callable  # (c, h, p) -> R(c h): the turn about ω_c by the angle −|ω_c| c h, as a tuple of floats
+    rotation_size: int  # the length of that tuple
     turn: Callable  # (R, q) -> R q: r and p turned
     kick_drift_kick: Callable  # (q, h, p) -> V(h) q
     from_canonical: Callable  # (q, p) -> (x, y, vx, vy)
@@ -86,50 +95,61 @@ def rotation_coefficients(weights: tuple[float, ...]) -> tuple[float, ...]:
     return (0.5 * weights[0], *inner, 0.5 * weights[-1])
 
 
-def verlet_sequence(model: Model, weights: tuple[float, ...], remainder_sweeps: int = 2) -> Callable:
-    """A numba step ``(x, y, vx, vy, h, p)``: the rotating-frame Verlet steps with sub-steps γ_1 h … γ_s h in turn,
-    computed in the canonical variables with neighbouring rotations merged (``rotation_coefficients``); one
-    Verlet step is ``weights = (1.0,)``. ``remainder_sweeps``: the fixed-point sweeps of the implicit half kick
-    on a model with a velocity-dependent remainder (``_plane_parts``). The s + 1 rotations depend on p and h alone: they are built first, as
-    one tuple, which the compiler hoists out of the fixed-step loop (the step is inlined into it), and the
-    sub-steps are a loop over them, as a C programmer writes it (bench/perf/loops.c; fully unrolled, the
-    nine sub-steps of ``composition6`` on the sphere ran 5 % slower)."""
-    parts = _sphere_parts(model) if model.constrained_to_sphere else _plane_parts(model, remainder_sweeps)
+def verlet_sequences(model: Model, weights: tuple[float, ...], sequence_sub_steps: int,
+                     remainder_sweeps: int = 2) -> tuple[Callable, Callable]:
+    """``(setup, step)`` of the rotating-frame Verlet steps with sub-steps γ_1 h … γ_s h in turn (one Verlet step:
+    ``weights = (1.0,)``), taken as consecutive sequences of ``sequence_sub_steps`` sub-steps (the last one
+    shorter). Each sequence is computed in the canonical variables with neighbouring rotations merged
+    (``rotation_coefficients`` of its weights); between sequences the state returns to (x, y, vx, vy).
+    ``remainder_sweeps``: the fixed-point sweeps of the implicit half kick on a model with a velocity-dependent
+    remainder (``_plane_parts``).
+
+    ``setup(h, p)`` computes what depends on p and h alone, once per run (the fixed-step loop calls it before
+    its first step, ``integrators.fixed_step.build_kernel``): ``(p, turns, sub_h)`` with ``turns`` the rotations of
+    every sequence in order (row j·(L + 1) + i: R(c_i h) of sequence j, one rotation per row, as a tuple of
+    floats, ``_Parts.rotation``) and ``sub_h`` the sub-step sizes γ_i h. ``step(x, y, vx, vy, h, constants)``
+    takes them in place of p: one compiled sub-step body in a loop over the table's rows, however many sub-steps
+    the composition has (compile time does not grow with s), doing the arithmetic of the sub-steps written out
+    one by one, in the same order, on the same numbers (bitwise the same states)."""
+    parts = verlet_parts(model, remainder_sweeps)
     weights = tuple(float(gamma) for gamma in weights)
-    rotations = _rotations(parts.rotation, rotation_coefficients(weights))
+    sequences = [weights[first:first + sequence_sub_steps] for first in range(0, len(weights), sequence_sub_steps)]
+    coefficients = tuple(c for sequence in sequences for c in rotation_coefficients(sequence))
+    rotation, rotation_size = parts.rotation, parts.rotation_size
     to_canonical, turn, kick_drift_kick, from_canonical = (
         parts.to_canonical, parts.turn, parts.kick_drift_kick, parts.from_canonical)
-    sub_steps = len(weights)
+    sub_steps, sequence_count, rotation_count = len(weights), len(sequences), len(coefficients)
 
-    @jit(inline="always")
-    def step(x, y, vx, vy, h, p):
-        turns = rotations(h, p)
-        q = to_canonical(x, y, vx, vy, p)
+    @jit
+    def setup(h, p):
+        turns = np.empty((rotation_count, rotation_size))
+        for row in range(rotation_count):
+            turn_row = rotation(coefficients[row], h, p)
+            for entry in range(rotation_size):  # element by element: a slice assignment takes seconds to compile
+                turns[row, entry] = turn_row[entry]
+        sub_h = np.empty(sub_steps)
         for i in range(sub_steps):
-            q = kick_drift_kick(turn(turns[i], q), weights[i] * h, p)
-        return from_canonical(turn(turns[sub_steps], q), p)
-
-    return step
-
-
-def _rotations(rotation: Callable, coefficients: tuple[float, ...]) -> Callable:
-    """A numba function ``(h, p)`` returning the tuple (R(c_0 h), …, R(c_s h)) (built by concatenation, one
-    coefficient at a time, so that it is a homogeneous tuple the step can index in its loop)."""
-    first = coefficients[0]
-    if len(coefficients) == 1:
-
-        @jit(inline="always")
-        def last(h, p):
-            return (rotation(first, h, p),)
-
-        return last
-    following = _rotations(rotation, coefficients[1:])
+            sub_h[i] = weights[i] * h
+        return p, turns, sub_h
 
     @jit(inline="always")
-    def rotations(h, p):
-        return (rotation(first, h, p),) + following(h, p)
+    def step(x, y, vx, vy, h, constants):
+        p, turns, sub_h = constants
+        for sequence in range(sequence_count):
+            first = sequence * sequence_sub_steps
+            last = min(first + sequence_sub_steps, sub_steps)
+            q = to_canonical(x, y, vx, vy, p)
+            for i in range(first, last):  # sub-step i turns by row i + sequence, the sequence's rows being shifted by its closing one
+                q = kick_drift_kick(turn(to_fixed_tuple(turns[i + sequence], rotation_size), q), sub_h[i], p)
+            x, y, vx, vy = from_canonical(turn(to_fixed_tuple(turns[last + sequence], rotation_size), q), p)
+        return x, y, vx, vy
 
-    return rotations
+    return setup, step
+
+
+def verlet_parts(model: Model, remainder_sweeps: int = 2) -> _Parts:
+    """The pieces of the rotating-frame Verlet step on the model's geometry (RATTLE on the sphere)."""
+    return _sphere_parts(model) if model.constrained_to_sphere else _plane_parts(model, remainder_sweeps)
 
 
 def _plane_parts(model: Model, remainder_sweeps: int = 2) -> _Parts:
@@ -195,7 +215,7 @@ def _plane_parts(model: Model, remainder_sweeps: int = 2) -> _Parts:
         a = p[P_OMEGA_Z]
         return x, y, px + a * y, py - a * x
 
-    return _Parts(to_canonical, rotation, turn, kick_drift_kick, from_canonical)
+    return _Parts(to_canonical, rotation, 2, turn, kick_drift_kick, from_canonical)
 
 
 def _sphere_parts(model: Model) -> _Parts:
@@ -258,7 +278,7 @@ def _sphere_parts(model: Model) -> _Parts:
         wz = p[P_OMEGA_Z]
         return x, y, px - (wy * z - wz * y), py - (wz * x - wx * z)
 
-    return _Parts(to_canonical, rotation, turn, kick_drift_kick, from_canonical)
+    return _Parts(to_canonical, rotation, 9, turn, kick_drift_kick, from_canonical)
 
 
 @jit
