@@ -678,3 +678,49 @@ DEFINE_LOOPS(spherical, composition6)
 DEFINE_LOOPS(spherical, boris)
 DEFINE_LOOPS(spherical, implicit_midpoint)
 DEFINE_LOOPS(spherical, gauss_legendre4)
+
+/* ---- gbs4 (integrators/methods/gbs4.py, integrators/extrapolation.py FixedOrderExtrapolation): per step the
+ * smoothed explicit midpoint lines of 2 and 4 substeps from one shared f(z0) (build_midpoint_line), combined
+ * with the Lagrange weights c = (-1/3, 4/3) of the harmonic sequence (extrapolation_weights) as the numba step
+ * sums them: from 0.0, in line order; the new state in place (no increment, no compensation) ---- */
+#define GBS4_WEIGHT_1 (-0.3333333333333333) /* float(Fraction(-1, 3)) */
+#define GBS4_WEIGHT_2 1.3333333333333333    /* float(Fraction(4, 3)) */
+#define gbs4_setup no_setup
+
+#define DEFINE_GBS4_STEP(model)                                                                               \
+    static inline void model##_midpoint_line(const consts *k, double x, double y, double vx, double vy,      \
+                                             double ax0, double ay0, double big_h, int n, double *t) {       \
+        double h = big_h / n, two_h = 2.0 * h, ax, ay;                                                        \
+        double px = x, py = y, pvx = vx, pvy = vy;                                                            \
+        double cx = x + h * vx, cy = y + h * vy, cvx = vx + h * ax0, cvy = vy + h * ay0;                      \
+        model##_acceleration(k, cx, cy, cvx, cvy, &ax, &ay);                                                  \
+        for (int m = 0; m < n - 1; m++) {                                                                     \
+            double nx = px + two_h * cvx, ny = py + two_h * cvy, nvx = pvx + two_h * ax, nvy = pvy + two_h * ay;\
+            px = cx; py = cy; pvx = cvx; pvy = cvy;                                                           \
+            cx = nx; cy = ny; cvx = nvx; cvy = nvy;                                                           \
+            model##_acceleration(k, cx, cy, cvx, cvy, &ax, &ay);                                              \
+        }                                                                                                     \
+        t[0] = 0.5 * (px + cx + h * cvx);                                                                     \
+        t[1] = 0.5 * (py + cy + h * cvy);                                                                     \
+        t[2] = 0.5 * (pvx + cvx + h * ax);                                                                    \
+        t[3] = 0.5 * (pvy + cvy + h * ay);                                                                    \
+    }                                                                                                         \
+    static inline void model##_gbs4_step(const consts *k, double h, double *x, double *y, double *vx,        \
+                                         double *vy) {                                                       \
+        double ax0, ay0, t1[4], t2[4];                                                                        \
+        model##_acceleration(k, *x, *y, *vx, *vy, &ax0, &ay0);                                                \
+        model##_midpoint_line(k, *x, *y, *vx, *vy, ax0, ay0, h, 2, t1);                                       \
+        model##_midpoint_line(k, *x, *y, *vx, *vy, ax0, ay0, h, 4, t2);                                       \
+        double sx = 0.0, sy = 0.0, svx = 0.0, svy = 0.0;                                                      \
+        sx += GBS4_WEIGHT_1 * t1[0]; sy += GBS4_WEIGHT_1 * t1[1];                                             \
+        svx += GBS4_WEIGHT_1 * t1[2]; svy += GBS4_WEIGHT_1 * t1[3];                                           \
+        sx += GBS4_WEIGHT_2 * t2[0]; sy += GBS4_WEIGHT_2 * t2[1];                                             \
+        svx += GBS4_WEIGHT_2 * t2[2]; svy += GBS4_WEIGHT_2 * t2[3];                                           \
+        *x = sx; *y = sy; *vx = svx; *vy = svy;                                                               \
+    }
+DEFINE_GBS4_STEP(linear)
+DEFINE_GBS4_STEP(spherical)
+PLAIN_ADVANCE(linear, gbs4)
+PLAIN_ADVANCE(spherical, gbs4)
+DEFINE_LOOPS(linear, gbs4)
+DEFINE_LOOPS(spherical, gbs4)
