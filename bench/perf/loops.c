@@ -178,7 +178,7 @@ DEFINE_KICK(linear, 0.0, 0.0)
 DEFINE_KICK(spherical, k->wx, k->wy)
 
 /* ---- schemes: one step (x, y, vx, vy) -> next, in place; rk4 and heun3 as increments, which the loop adds
- * with compensated summation (integrators/explicit_rk.py make_increment, COMPENSATED_ADVANCE) ---- */
+ * with compensated summation (integrators/explicit_rk.py make_increment, COMPENSATED_ADVANCE); nystrom4 too ---- */
 
 #define DEFINE_RUNGE_KUTTA_STEPS(model)                                                                       \
     static inline void model##_explicit_euler_step(const consts *k, double h, double *x, double *y,          \
@@ -235,9 +235,9 @@ DEFINE_KICK(spherical, k->wx, k->wy)
         d[3] = quarter * (k1ay + 3.0 * k3ay);                                                                 \
     }                                                                                                         \
     /* integrators/methods/nystrom4.py: the general Runge-Kutta-Nystrom method, stages at stage velocities */ \
-    static inline void model##_nystrom4_step(const consts *k, double h, double *px, double *py, double *pvx, \
-                                             double *pvy) {                                                  \
-        double x = *px, y = *py, vx = *pvx, vy = *pvy, half = 0.5 * h, eighth_h2 = 0.125 * h * h;            \
+    static inline void model##_nystrom4_increment(const consts *k, double h, double x, double y, double vx,  \
+                                                  double vy, double *d) {                                    \
+        double half = 0.5 * h, eighth_h2 = 0.125 * h * h;                                                     \
         double k1x, k1y, k2x, k2y, k3x, k3y, k4x, k4y;                                                        \
         model##_acceleration(k, x, y, vx, vy, &k1x, &k1y);                                                    \
         double x2 = x + half * vx + eighth_h2 * k1x, y2 = y + half * vy + eighth_h2 * k1y;                    \
@@ -247,10 +247,10 @@ DEFINE_KICK(spherical, k->wx, k->wy)
         model##_acceleration(k, x + h * vx + half_h2 * k3x, y + h * vy + half_h2 * k3y, vx + h * k3x,         \
                              vy + h * k3y, &k4x, &k4y);                                                       \
         double sixth_h2 = h * h / 6.0, sixth = h / 6.0;                                                       \
-        *px = x + h * vx + sixth_h2 * (k1x + k2x + k3x);                                                      \
-        *py = y + h * vy + sixth_h2 * (k1y + k2y + k3y);                                                      \
-        *pvx = vx + sixth * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);                                              \
-        *pvy = vy + sixth * (k1y + 2.0 * k2y + 2.0 * k3y + k4y);                                              \
+        d[0] = h * vx + sixth_h2 * (k1x + k2x + k3x);                                                         \
+        d[1] = h * vy + sixth_h2 * (k1y + k2y + k3y);                                                         \
+        d[2] = sixth * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);                                                   \
+        d[3] = sixth * (k1y + 2.0 * k2y + 2.0 * k3y + k4y);                                                   \
     }
 DEFINE_RUNGE_KUTTA_STEPS(linear)
 DEFINE_RUNGE_KUTTA_STEPS(spherical)
@@ -571,7 +571,7 @@ static void turning_point(double x0, double y0, double vx0, double vy0, double x
 #define PLAIN_ADVANCES(model)                                                                                 \
     PLAIN_ADVANCE(model, explicit_euler) PLAIN_ADVANCE(model, symplectic_euler)                              \
     COMPENSATED_ADVANCE(model, rk4) COMPENSATED_ADVANCE(model, heun3)                                        \
-    PLAIN_ADVANCE(model, nystrom4) PLAIN_ADVANCE(model, verlet)                                              \
+    COMPENSATED_ADVANCE(model, nystrom4) PLAIN_ADVANCE(model, verlet)                                              \
     PLAIN_ADVANCE(model, yoshida4) PLAIN_ADVANCE(model, composition6) PLAIN_ADVANCE(model, boris)            \
     COMPENSATED_ADVANCE(model, implicit_midpoint) COMPENSATED_ADVANCE(model, gauss_legendre4)
 PLAIN_ADVANCES(linear)
