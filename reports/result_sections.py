@@ -82,6 +82,11 @@ def decisions(builder: Builder, inputs: ReportInputs) -> None:
     builder.table(tables.matched_accuracy(runs, targets), "matched_accuracy",
                   "Cheapest integrator and setting per scene and target, runner-up and cost ratio", collapsible=True)
     builder.add(Paragraph(
+        "Per scene and target, every integrator ranked by the cost of its cheapest setting meeting the target, "
+        "with its cost over the cheapest one's; the integrators that do not reach it follow with their best error."))
+    builder.table(tables.ranked_at_targets(runs, targets), "ranked_at_targets",
+                  "Every integrator at matched accuracy: rank and cost ratio per scene and target", collapsible=True)
+    builder.add(Paragraph(
         f"Per scene and integrator, its cheapest setting reaching {tables.MATCHED_ACCURACY_TARGET:g}, or "
         "'not reached'; the counts show every diverged and failed run."))
     builder.table(tables.per_integrator(runs), "per_integrator",

@@ -2,6 +2,8 @@
 
 * ``matched_accuracy``: per scene and target (1e-3, 1e-6, 1e-9, 1e-12 or the targets given), the cheapest integrator
   and setting whose reference error meets it, the runner-up and the cost ratio (``bench.verdicts.pareto``);
+* ``ranked_at_targets``: per scene and target, every integrator's cheapest setting meeting it, ranked by cost with
+  its ratio to the cheapest, or "not reached" with its best error;
 * ``per_integrator``: one row per (scene, integrator): the cheapest setting whose reference error reaches
   ``target`` (1e-6 by default), its cost, or "not reached"; run counts by status;
 * ``fronts`` / ``families``: the Pareto-efficient runs of every error metric, and the best run of each family
@@ -54,7 +56,9 @@ DERIVED_NOTES: dict[str, str] = {
     "runner_up": "cheapest integrator other than the winner meeting the target",
     "runner_up_setting": "its setting",
     "runner_up_error": "its error",
-    "ratio": "runner-up cost / winner cost (≥ 1: how much the winner saves)",
+    "ratio": "runner-up cost / winner cost (≥ 1: how much the winner saves); in the ranking at matched accuracy, "
+             "this integrator's cost / the cheapest one's",
+    "rank": "1 for the cheapest integrator meeting the target, 2 for the next, …; empty when not reached",
     "best_error": "smallest error any ok run reached (when the target is not reached)",
     "front_points": "runs of the family on the scene's Pareto front",
     "runner_up_cpu_time_s": "s; runner-up's CPU time",
@@ -178,6 +182,13 @@ def matched_accuracy(frame: pd.DataFrame, targets: Sequence[float] = DEFAULT_TAR
     """Per scene and target: the cheapest integrator and setting meeting it, the runner-up (cheapest run of
     another integrator) and the cost ratio (``bench.verdicts.pareto.matched_accuracy``)."""
     return pareto.matched_accuracy(frame, metric, targets)
+
+
+def ranked_at_targets(frame: pd.DataFrame, targets: Sequence[float] = DEFAULT_TARGETS,
+                      metric: str = "reference_error") -> pd.DataFrame:
+    """Per scene and target: every integrator's cheapest setting meeting it, its rank by cost and its cost over the
+    cheapest one's, or 'not reached' (``bench.verdicts.pareto.ranked_at_targets``)."""
+    return pareto.ranked_at_targets(frame, metric, targets)
 
 
 def fronts(frame: pd.DataFrame) -> pd.DataFrame:

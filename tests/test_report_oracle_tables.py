@@ -504,3 +504,40 @@ def test_each_scene_page_shows_that_scene_s_rows_only(fixture_report: Path, fixt
             assert named and named <= settings
             checked["charts"] += 1
     assert checked["rows"] == len(runs) and checked["not ok"] > 0 and checked["charts"] >= 4 * len(SCENE_NAMES)
+
+
+RANKED = "Every integrator at matched accuracy: rank and cost ratio per scene and target"
+
+
+def test_every_integrator_is_ranked_at_each_target_as_the_rows_say(fixture_report: Path,
+                                                                    fixture_database: Path) -> None:
+    """Per scene and target: each integrator of the scene that has a usable run meeting the target appears once,
+    ranked by the CPU time of its cheapest such run (rank 1 the cheapest), with that run's setting, error and
+    cost over the cheapest integrator's; every other integrator of the scene is 'not reached' with the smallest
+    error of its usable runs."""
+    runs = _database_rows(fixture_database)
+    shown = Rendered(report_html(fixture_report)).table(RANKED)
+    checked = {"reached": 0, "not reached": 0}
+    for (scene, target_cell), rows in shown.groupby(["scene", "target"], sort=False):
+        target = float(target_cell)
+        scene_runs = runs[runs["scene"] == scene]
+        usable = _usable(scene_runs).assign(error=lambda frame: frame["reference_error"].abs())
+        met = usable[usable["error"] <= target].sort_values(["cpu_time_s", "error"], kind="stable")
+        cheapest = met.drop_duplicates("integrator")
+        assert list(rows["integrator"]) == [*cheapest["integrator"],
+                                            *sorted(set(scene_runs["integrator"]) - set(cheapest["integrator"]))]
+        for rank, (row, run) in enumerate(zip(rows.head(len(cheapest)).itertuples(index=False),
+                                              cheapest.itertuples(index=False), strict=True), start=1):
+            assert (int(row.rank), row.outcome, row.setting) == (rank, "reached", setting_label(run.kh, run.tol))
+            assert _number(row.cpu_time_s) == pytest.approx(run.cpu_time_s, rel=5e-3)
+            assert _number(row.ratio) == pytest.approx(run.cpu_time_s / cheapest["cpu_time_s"].iloc[0], rel=5e-3)
+            checked["reached"] += 1
+        for row in rows.iloc[len(cheapest):].itertuples(index=False):
+            own = usable[usable["integrator"] == row.integrator]["error"]
+            assert (row.outcome, row.rank) == ("not reached", "–")
+            if own.empty:
+                assert row.best_error == "–"
+            else:
+                assert _number(row.best_error) == pytest.approx(own.min(), rel=5e-3)
+            checked["not reached"] += 1
+    assert checked["reached"] > 0 and checked["not reached"] > 0

@@ -118,3 +118,20 @@ def test_a_scheme_declaring_fewer_stages_than_it_evaluates_fails_the_counters() 
     assert counters.detail == f"nfev = {3 * steps} ≠ stages × steps = 1 × {steps}"
     declared_three = type("DeclaredThree", (MisDeclared,), {"stages": 3})()
     assert check_counters_and_turning_points(declared_three)[0].holds is True
+
+
+def test_the_high_order_fit_leaves_out_a_round_off_tilted_last_point() -> None:
+    """A sweep by 10^(1/10) on the asymptotic line e = h¹⁰ whose last error is lowered to a local slope of 10.7
+    instead of 10 (as composition10's last point on the sphere, where round-off met the truncation error): the report's 10 % rule fits it in and sees more
+    than 10.05; the high-order sweep's 5 % rule (``order_sweep.fit_order``) leaves it out and sees 10."""
+    import numpy as np
+
+    from foucault_bench.bench.gate.order_sweep import HALVING, fit_order, sweep_for
+    from foucault_bench.bench.verdicts.convergence import observed_order
+
+    steps = list(0.9 * 10.0 ** (-np.arange(6) / 10.0))
+    errors = [h ** 10 for h in steps]
+    errors[-1] *= (steps[-1] / steps[-2]) ** 0.7  # local slope 10.7
+    assert observed_order(steps, errors) > 10.05
+    assert fit_order(sweep_for(10), steps, errors) == pytest.approx(10.0, abs=1e-9)
+    assert fit_order(HALVING, steps, errors) == observed_order(steps, errors)

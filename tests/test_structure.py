@@ -98,6 +98,59 @@ def test_measured_stability_limit_is_the_declared_one(name: str) -> None:
     assert measured == pytest.approx(declared, rel=1e-3)
 
 
+def _splitting_limit(half_trace) -> float:
+    """The first kh > 0 where |½ trace| of a splitting's one-step matrix on ẍ = −x (det 1) reaches 1: a scan in
+    steps of 1e-3, then bisection to 1e-10."""
+    unstable = next(kh for kh in np.arange(1, 10_001) * 1e-3 if abs(half_trace(kh)) >= 1.0)
+    low, high = unstable - 1e-3, unstable
+    while high - low > 1e-10:
+        middle = 0.5 * (low + high)
+        low, high = (low, middle) if abs(half_trace(middle)) >= 1.0 else (middle, high)
+    return low
+
+
+def _drift(s: float) -> np.ndarray:
+    return np.array([[1.0, s], [0.0, 1.0]])
+
+
+def _kick(s: float) -> np.ndarray:
+    return np.array([[1.0, 0.0], [-s, 1.0]])
+
+
+COEFFICIENT_LIMITS = {
+    # Störmer-Verlet, D(h/2) K(h) D(h/2) (Boris without rotation: its Coriolis turn is the identity)
+    "verlet": lambda: _splitting_limit(lambda kh: 0.5 * np.trace(_drift(kh / 2) @ _kick(kh) @ _drift(kh / 2))),
+    "boris": lambda: _splitting_limit(lambda kh: 0.5 * np.trace(_drift(kh / 2) @ _kick(kh / 2) @ _kick(kh / 2)
+                                                                @ _drift(kh / 2))),
+    "symplectic_euler": lambda: _splitting_limit(lambda kh: 0.5 * np.trace(_drift(kh) @ _kick(kh))),
+    # the implicit schemes: the fixed-point solve's limit 1/ρ(A) (integrators.gauss "Limit")
+    "implicit_midpoint": lambda: 1.0 / max(abs(np.linalg.eigvals(np.array([[0.5]])))),
+    "gauss_legendre4": lambda: 1.0 / max(abs(np.linalg.eigvals(np.array([[0.25, 0.25 - math.sqrt(3) / 6],
+                                                                         [0.25 + math.sqrt(3) / 6, 0.25]])))),
+}
+"""The fixed-step schemes whose limit is a hand-declared constant, and that limit computed from their coefficients.
+The others compute theirs from their coefficients when declared: the explicit tableaux (tests/test_tableau.py),
+the compositions (``integrators.composition.Composition.oscillator_stability_limit``), gbs4
+(tests/test_extrapolation.py), nystrom4 (tests/test_nystrom4.py)."""
+
+
+def test_every_fixed_step_limit_is_computed_from_the_coefficients_somewhere() -> None:
+    from foucault_bench.integrators.composition import VerletComposition
+    from foucault_bench.integrators.explicit_rk import ExplicitRungeKutta
+
+    computed_elsewhere = {name for name in FIXED_STEP
+                          if isinstance(REGISTRY[name], (ExplicitRungeKutta, VerletComposition))} | {"gbs4", "nystrom4"}
+    assert set(FIXED_STEP) == computed_elsewhere | set(COEFFICIENT_LIMITS), set(FIXED_STEP) ^ (
+        computed_elsewhere | set(COEFFICIENT_LIMITS))
+
+
+@pytest.mark.parametrize("name", sorted(COEFFICIENT_LIMITS))
+def test_hand_declared_stability_limits_are_the_coefficients(name: str) -> None:
+    """The declared constant is the limit computed from the coefficients (to 1e-9); that it is also where the
+    compiled step stops being stable is ``test_measured_stability_limit_is_the_declared_one``."""
+    assert REGISTRY[name].stability_limit_kh == pytest.approx(COEFFICIENT_LIMITS[name](), abs=1e-9)
+
+
 @pytest.mark.parametrize("name", [n for n in FIXED_STEP if REGISTRY[n].rotation_growth_per_step(1.0, 1e-4)])
 def test_growth_with_rotation_follows_the_declared_law(name: str) -> None:
     """Within 10 % (the law is first order in ah; measured agreement ~1e-4), at every k·h below the limit."""

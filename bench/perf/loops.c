@@ -180,7 +180,7 @@ DEFINE_KICK(linear, 0.0, 0.0)
 DEFINE_KICK(spherical, k->wx, k->wy)
 
 /* ---- schemes: one step (x, y, vx, vy) -> next, in place; rk4 and heun3 as increments, which the loop adds
- * with compensated summation (integrators/explicit_rk.py make_increment, COMPENSATED_ADVANCE) ---- */
+ * with compensated summation (integrators/explicit_rk.py make_increment, COMPENSATED_ADVANCE); nystrom4 too ---- */
 
 #define DEFINE_RUNGE_KUTTA_STEPS(model)                                                                       \
     static inline void model##_explicit_euler_step(const consts *k, double h, double *x, double *y,          \
@@ -237,9 +237,9 @@ DEFINE_KICK(spherical, k->wx, k->wy)
         d[3] = quarter * (k1ay + 3.0 * k3ay);                                                                 \
     }                                                                                                         \
     /* integrators/methods/nystrom4.py: the general Runge-Kutta-Nystrom method, stages at stage velocities */ \
-    static inline void model##_nystrom4_step(const consts *k, double h, double *px, double *py, double *pvx, \
-                                             double *pvy) {                                                  \
-        double x = *px, y = *py, vx = *pvx, vy = *pvy, half = 0.5 * h, eighth_h2 = 0.125 * h * h;            \
+    static inline void model##_nystrom4_increment(const consts *k, double h, double x, double y, double vx,  \
+                                                  double vy, double *d) {                                    \
+        double half = 0.5 * h, eighth_h2 = 0.125 * h * h;                                                     \
         double k1x, k1y, k2x, k2y, k3x, k3y, k4x, k4y;                                                        \
         model##_acceleration(k, x, y, vx, vy, &k1x, &k1y);                                                    \
         double x2 = x + half * vx + eighth_h2 * k1x, y2 = y + half * vy + eighth_h2 * k1y;                    \
@@ -249,10 +249,10 @@ DEFINE_KICK(spherical, k->wx, k->wy)
         model##_acceleration(k, x + h * vx + half_h2 * k3x, y + h * vy + half_h2 * k3y, vx + h * k3x,         \
                              vy + h * k3y, &k4x, &k4y);                                                       \
         double sixth_h2 = h * h / 6.0, sixth = h / 6.0;                                                       \
-        *px = x + h * vx + sixth_h2 * (k1x + k2x + k3x);                                                      \
-        *py = y + h * vy + sixth_h2 * (k1y + k2y + k3y);                                                      \
-        *pvx = vx + sixth * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);                                              \
-        *pvy = vy + sixth * (k1y + 2.0 * k2y + 2.0 * k3y + k4y);                                              \
+        d[0] = h * vx + sixth_h2 * (k1x + k2x + k3x);                                                         \
+        d[1] = h * vy + sixth_h2 * (k1y + k2y + k3y);                                                         \
+        d[2] = sixth * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);                                                   \
+        d[3] = sixth * (k1y + 2.0 * k2y + 2.0 * k3y + k4y);                                                   \
     }
 DEFINE_RUNGE_KUTTA_STEPS(linear)
 DEFINE_RUNGE_KUTTA_STEPS(spherical)
@@ -575,7 +575,7 @@ static void turning_point(double x0, double y0, double vx0, double vy0, double x
 #define PLAIN_ADVANCES(model)                                                                                 \
     PLAIN_ADVANCE(model, explicit_euler) PLAIN_ADVANCE(model, symplectic_euler)                              \
     COMPENSATED_ADVANCE(model, rk4) COMPENSATED_ADVANCE(model, heun3)                                        \
-    PLAIN_ADVANCE(model, nystrom4) PLAIN_ADVANCE(model, verlet)                                              \
+    COMPENSATED_ADVANCE(model, nystrom4) PLAIN_ADVANCE(model, verlet)                                              \
     PLAIN_ADVANCE(model, yoshida4) PLAIN_ADVANCE(model, composition6) PLAIN_ADVANCE(model, boris)            \
     COMPENSATED_ADVANCE(model, implicit_midpoint) COMPENSATED_ADVANCE(model, gauss_legendre4)
 PLAIN_ADVANCES(linear)
@@ -739,3 +739,49 @@ DEFINE_SEQUENCES_STEP(linear, composition8, 15)
 DEFINE_SEQUENCES_STEP(linear, composition10, 35)
 DEFINE_SEQUENCES_STEP(spherical, composition8, 15)
 DEFINE_SEQUENCES_STEP(spherical, composition10, 35)
+
+/* ---- gbs4 (integrators/methods/gbs4.py, integrators/extrapolation.py FixedOrderExtrapolation): per step the
+ * smoothed explicit midpoint lines of 2 and 4 substeps from one shared f(z0) (build_midpoint_line), combined
+ * with the Lagrange weights c = (-1/3, 4/3) of the harmonic sequence (extrapolation_weights) as the numba step
+ * sums them: from 0.0, in line order; the new state in place (no increment, no compensation) ---- */
+#define GBS4_WEIGHT_1 (-0.3333333333333333) /* float(Fraction(-1, 3)) */
+#define GBS4_WEIGHT_2 1.3333333333333333    /* float(Fraction(4, 3)) */
+#define gbs4_setup no_setup
+
+#define DEFINE_GBS4_STEP(model)                                                                               \
+    static inline void model##_midpoint_line(const consts *k, double x, double y, double vx, double vy,      \
+                                             double ax0, double ay0, double big_h, int n, double *t) {       \
+        double h = big_h / n, two_h = 2.0 * h, ax, ay;                                                        \
+        double px = x, py = y, pvx = vx, pvy = vy;                                                            \
+        double cx = x + h * vx, cy = y + h * vy, cvx = vx + h * ax0, cvy = vy + h * ay0;                      \
+        model##_acceleration(k, cx, cy, cvx, cvy, &ax, &ay);                                                  \
+        for (int m = 0; m < n - 1; m++) {                                                                     \
+            double nx = px + two_h * cvx, ny = py + two_h * cvy, nvx = pvx + two_h * ax, nvy = pvy + two_h * ay;\
+            px = cx; py = cy; pvx = cvx; pvy = cvy;                                                           \
+            cx = nx; cy = ny; cvx = nvx; cvy = nvy;                                                           \
+            model##_acceleration(k, cx, cy, cvx, cvy, &ax, &ay);                                              \
+        }                                                                                                     \
+        t[0] = 0.5 * (px + cx + h * cvx);                                                                     \
+        t[1] = 0.5 * (py + cy + h * cvy);                                                                     \
+        t[2] = 0.5 * (pvx + cvx + h * ax);                                                                    \
+        t[3] = 0.5 * (pvy + cvy + h * ay);                                                                    \
+    }                                                                                                         \
+    static inline void model##_gbs4_step(const consts *k, double h, double *x, double *y, double *vx,        \
+                                         double *vy) {                                                       \
+        double ax0, ay0, t1[4], t2[4];                                                                        \
+        model##_acceleration(k, *x, *y, *vx, *vy, &ax0, &ay0);                                                \
+        model##_midpoint_line(k, *x, *y, *vx, *vy, ax0, ay0, h, 2, t1);                                       \
+        model##_midpoint_line(k, *x, *y, *vx, *vy, ax0, ay0, h, 4, t2);                                       \
+        double sx = 0.0, sy = 0.0, svx = 0.0, svy = 0.0;                                                      \
+        sx += GBS4_WEIGHT_1 * t1[0]; sy += GBS4_WEIGHT_1 * t1[1];                                             \
+        svx += GBS4_WEIGHT_1 * t1[2]; svy += GBS4_WEIGHT_1 * t1[3];                                           \
+        sx += GBS4_WEIGHT_2 * t2[0]; sy += GBS4_WEIGHT_2 * t2[1];                                             \
+        svx += GBS4_WEIGHT_2 * t2[2]; svy += GBS4_WEIGHT_2 * t2[3];                                           \
+        *x = sx; *y = sy; *vx = svx; *vy = svy;                                                               \
+    }
+DEFINE_GBS4_STEP(linear)
+DEFINE_GBS4_STEP(spherical)
+PLAIN_ADVANCE(linear, gbs4)
+PLAIN_ADVANCE(spherical, gbs4)
+DEFINE_LOOPS(linear, gbs4)
+DEFINE_LOOPS(spherical, gbs4)

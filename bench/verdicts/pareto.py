@@ -12,7 +12,9 @@ report, the ``advise`` command and the tests share one definition:
   scene's front runs are the family's;
 * ``cheapest_meeting``: every run that meets a target, cheapest first, one per integrator and setting;
 * ``matched_accuracy``: per scene and target, the cheapest run meeting it, the runner-up (the cheapest run of
-  another integrator) and their cost ratio.
+  another integrator) and their cost ratio;
+* ``ranked_at_targets``: per scene and target, every integrator's cheapest run meeting it, ranked by cost with its
+  ratio to the cheapest, and the integrators that do not reach it with their best error.
 
 Errors are compared as absolute values; a run counts only when its status is ok and both its cost and its
 error are finite, with cost > 0 and error ≥ 0.
@@ -170,6 +172,38 @@ def matched_accuracy(frame: pd.DataFrame, metric: str = "reference_error",
     columns = ["scene", "metric", "target", "outcome", "integrator", "setting", "error", "cost", "runner_up",
                "runner_up_setting", "runner_up_error", "runner_up_cost", "ratio", "best_error"]
     return pd.DataFrame(rows, columns=columns).rename(columns={"cost": cost, "runner_up_cost": f"runner_up_{cost}"})
+
+
+def ranked_at_targets(frame: pd.DataFrame, metric: str = "reference_error",
+                      targets: Sequence[float] = DEFAULT_TARGETS) -> pd.DataFrame:
+    """Per scene, target and integrator of the scene: its cheapest run with |metric| ≤ target (``cheapest_meeting``),
+    its ``rank`` among the integrators that meet it (1: the cheapest, the winner of ``matched_accuracy``) and
+    ``ratio`` = its cost / the winner's; 'not reached' with its ``best_error`` (the smallest |metric| of its usable
+    runs, empty when it has none) otherwise. Rows of a scene and target: ranked first, cheapest first, then the
+    integrators that do not reach it by name."""
+    cost = cost_column(frame)
+    rows = []
+    for scene in sorted(frame["scene"].unique()):
+        scene_rows = frame[frame["scene"] == scene]
+        usable = usable_runs(scene_rows, metric, cost)
+        for target in sorted(targets, reverse=True):
+            met = cheapest_meeting(scene_rows, metric, target).drop_duplicates("integrator")
+            winner_cost = met[cost].iloc[0] if not met.empty else np.nan
+            for rank, run in enumerate(met.itertuples(index=False), start=1):
+                run_cost = getattr(run, cost)
+                rows.append({"scene": scene, "metric": metric, "target": float(target), "rank": rank,
+                             "integrator": run.integrator, "family": run.family, "outcome": "reached",
+                             "setting": run.setting, "error": run.error, cost: run_cost,
+                             "ratio": run_cost / winner_cost})
+            for integrator in sorted(set(scene_rows["integrator"]) - set(met["integrator"])):
+                own = usable[usable["integrator"] == integrator]["error"]
+                family = scene_rows.loc[scene_rows["integrator"] == integrator, "family"].iloc[0]
+                rows.append({"scene": scene, "metric": metric, "target": float(target), "integrator": integrator,
+                             "family": family, "outcome": "not reached",
+                             "best_error": own.min() if not own.empty else np.nan})
+    columns = ["scene", "metric", "target", "rank", "integrator", "family", "outcome", "setting", "error", cost,
+               "ratio", "best_error"]
+    return pd.DataFrame(rows, columns=columns)
 
 
 def metrics_present(frame: pd.DataFrame) -> list[str]:
