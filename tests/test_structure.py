@@ -75,9 +75,9 @@ def test_the_checks_reject_a_method_without_the_property() -> None:
 
 @pytest.mark.parametrize("name", _declaring("conserves_quadratic_invariants"))
 def test_quadratic_invariant_kept_to_round_off_over_a_long_run(name: str) -> None:
-    """20 000 steps at kh = 0.5: what is left is round-off, at most a few ε per step accumulating linearly (the
-    solve stops within half an ulp of its fixed point; Brouwer's law needs compensated sums to do better):
-    bound 4ε per step, 1.8e-11; measured 1e-12 to 3.5e-12. Any truncation error is far above it."""
+    """20 000 steps at kh = 0.5: what is left is round-off, at most a few ε per step even if it accumulated
+    linearly: bound 4ε per step, 1.8e-11; measured 1.3e-14 and 2.0e-14 (a random walk of round-off,
+    ``tests/test_long_time_roundoff.py``). Any truncation error is far above it."""
     steps = 20_000
     h = 0.5 / PARIS_10M.pendulum_frequency_rad_s
     problem = Problem(MODELS["linear"], PARIS_10M, np.linspace(0.0, steps * h, 11))
@@ -94,7 +94,7 @@ def test_measured_stability_limit_is_the_declared_one(name: str) -> None:
     declared = REGISTRY[name].stability_limit_kh
     grid = np.round(np.arange(0.1, max(4.0, 1.1 * declared) + 0.05, 0.1), 6)  # composition10's limit is 5.97
     measured = measured_stability_limit(REGISTRY[name], NO_ROTATION, grid, resolution_kh=1e-5)
-    # 1e-3: the implicit schemes' solve stops certifying convergence 4e-4 below its limit (integrators.gauss)
+    # 1e-3: the implicit schemes' sweeps stop reaching Newton's hand-over 1e-4 below the limit (integrators.gauss)
     assert measured == pytest.approx(declared, rel=1e-3)
 
 

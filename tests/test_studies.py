@@ -134,8 +134,8 @@ def test_stable_below_the_limit_and_blown_up_above_it(stability_table: pd.DataFr
 
 def test_measured_limits_match_the_declared_ones_without_rotation(stability_table: pd.DataFrame) -> None:
     """Bisected on the one-step map's growth between the grid points around the declared limit (to 1e-4 in kh).
-    Within 1e-3 relative: the implicit schemes' fixed-point solve stops certifying convergence 4e-4 (relative)
-    below its limit, where its round-off floor ε/(1 − ρ) rises (``integrators.gauss``)."""
+    Within 1e-3 relative: the implicit schemes' fixed-point sweeps stop reaching their hand-over to Newton within
+    their sweep budget 1e-4 (relative) below their limit (``integrators.gauss``)."""
     built_in = stability_table["integrator"].isin(built_in_names())  # plug-ins: their selftest
     still = stability_table[built_in & ~stability_table["rotation"] & stability_table["stability_limit_kh"].notna()]
     for name, rows in still.groupby("integrator"):

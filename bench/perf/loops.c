@@ -429,33 +429,39 @@ static inline void spherical_boris_step(const consts *k, double h, double *x_, d
     *vy_ = vy;
 }
 
-/* ---- Gauss-Legendre collocation, fixed-point solve to round-off (integrators/gauss.py) ---- */
+/* ---- Gauss-Legendre collocation: fixed-point sweeps, then simplified Newton to round-off (integrators/gauss.py) ---- */
 
-#define STALL_SWEEPS 8
+#define NEWTON_START_INCREMENT 1.0e-4
+#define NEWTON_ROUNDOFF 0x1p-52
 #define CONVERGED_INCREMENT 1.0e-12
 #define DIVERGED_INCREMENT 1.0e3
 #define MAX_SWEEPS 100000
+#define NEWTON_ITERATIONS 20
+#define DIFFERENCE_STEP 0x1p-26
 #define SQRT3 1.7320508075688772 /* math.sqrt(3.0) */
+/* the solve's pieces are inlined, as numba inlines them (inline="always"): left to gcc's heuristics, the stage
+   images and the increments of the two-stage method stay calls whose arrays live in memory (1.2-1.5x slower) */
+#define GAUSS_INLINE static inline __attribute__((always_inline))
 #define GAUSS2_S (SQRT3 / 6.0)
 
 static inline double squared_norm(double dx, double dy, double dvx, double dvy, double k) {
     return k * k * (dx * dx + dy * dy) + dvx * dvx + dvy * dvy;
 }
 
-/* gauss.py _sweep_verdict: 1 when the iteration is done; *converged says how */
-static inline int sweep_verdict(double increment, double *smallest, int *stalled, int *converged) {
-    if (increment < *smallest) {
-        *smallest = increment;
-        *stalled = 0;
-    } else {
-        (*stalled)++;
-    }
-    if (increment == 0.0 || (*stalled >= STALL_SWEEPS && *smallest <= CONVERGED_INCREMENT)) {
-        *converged = 1;
-        return 1;
-    }
-    *converged = 0;
-    return increment > DIVERGED_INCREMENT;
+/* gauss.py _newton_converged */
+GAUSS_INLINE int newton_converged(double change, double previous) {
+    return change <= NEWTON_ROUNDOFF || (change >= previous && previous <= CONVERGED_INCREMENT);
+}
+
+/* gauss.py _inverse2 and _product2: 2x2 matrices as row-major arrays */
+GAUSS_INLINE void inverse2(double m11, double m12, double m21, double m22, double *r) {
+    double det = m11 * m22 - m12 * m21;
+    r[0] = m22 / det; r[1] = -m12 / det; r[2] = -m21 / det; r[3] = m11 / det;
+}
+
+GAUSS_INLINE void product2(const double *a, const double *b, double *r) {
+    r[0] = a[0] * b[0] + a[1] * b[2]; r[1] = a[0] * b[1] + a[1] * b[3];
+    r[2] = a[2] * b[0] + a[3] * b[2]; r[3] = a[2] * b[1] + a[3] * b[3];
 }
 
 /* integrators/fixed_step.py compensated_add: *total += increment, with the compensation *c (Kahan) */
@@ -468,59 +474,141 @@ static inline void compensated_add(double *total, double increment, double *c) {
 
 /* the increments h sum b_i f(Y_i), added by the loop with compensated summation (gauss.py make_increment) */
 #define DEFINE_GAUSS_STEPS(model)                                                                             \
-    static inline void model##_implicit_midpoint_increment(const consts *k, double h, double x, double y,    \
-                                                           double vx, double vy, double *d) {                \
-        double ax, ay, kk = k->k;                                                                             \
-        model##_acceleration(k, x, y, vx, vy, &ax, &ay);                                                      \
-        double scale = kk * (fabs(x) + fabs(y)) + fabs(vx) + fabs(vy) + 1e-300;                               \
-        double zx = 0.5 * h * vx, zy = 0.5 * h * vy, zvx = 0.5 * h * ax, zvy = 0.5 * h * ay;                  \
-        double smallest = INFINITY;                                                                           \
-        int stalled = 0, converged = 0;                                                                       \
-        for (int sweep = 0; sweep < MAX_SWEEPS; sweep++) {                                                    \
-            double mvx = vx + zvx, mvy = vy + zvy, max_, may;                                                 \
-            model##_acceleration(k, x + zx, y + zy, mvx, mvy, &max_, &may);                                   \
-            double nx = 0.5 * h * mvx, ny = 0.5 * h * mvy, nvx = 0.5 * h * max_, nvy = 0.5 * h * may;         \
-            double increment = sqrt(squared_norm(nx - zx, ny - zy, nvx - zvx, nvy - zvy, kk)) / scale;         \
-            zx = nx; zy = ny; zvx = nvx; zvy = nvy;                                                           \
-            if (sweep_verdict(increment, &smallest, &stalled, &converged)) break;                             \
-        }                                                                                                     \
-        if (!converged) { d[0] = d[1] = d[2] = d[3] = NAN; return; }                                          \
-        double fx, fy;                                                                                        \
-        model##_acceleration(k, x + zx, y + zy, vx + zvx, vy + zvy, &fx, &fy);                                \
-        d[0] = h * (vx + zvx);                                                                                \
-        d[1] = h * (vy + zvy);                                                                                \
-        d[2] = h * fx;                                                                                        \
-        d[3] = h * fy;                                                                                        \
+    /* gauss.py _difference_jacobian: j = (dax/dx, dax/dy, day/dx, day/dy, dax/dvx, dax/dvy, day/dvx, day/dvy) */ \
+    GAUSS_INLINE void model##_difference_jacobian(const consts *k, double x, double y, double vx, double vy,  \
+                                                   double ax, double ay, double dr, double dv, double *j) {  \
+        double bx, by, step = (x + dr) - x;                                                                   \
+        model##_acceleration(k, x + step, y, vx, vy, &bx, &by);                                               \
+        j[0] = (bx - ax) / step; j[2] = (by - ay) / step;                                                     \
+        step = (y + dr) - y;                                                                                  \
+        model##_acceleration(k, x, y + step, vx, vy, &bx, &by);                                               \
+        j[1] = (bx - ax) / step; j[3] = (by - ay) / step;                                                     \
+        step = (vx + dv) - vx;                                                                                \
+        model##_acceleration(k, x, y, vx + step, vy, &bx, &by);                                               \
+        j[4] = (bx - ax) / step; j[6] = (by - ay) / step;                                                     \
+        step = (vy + dv) - vy;                                                                                \
+        model##_acceleration(k, x, y, vx, vy + step, &bx, &by);                                               \
+        j[5] = (bx - ax) / step; j[7] = (by - ay) / step;                                                     \
     }                                                                                                         \
-    static inline void model##_gauss_legendre4_increment(const consts *k, double h, double x, double y,      \
-                                                         double vx, double vy, double *d) {                  \
-        double ax, ay, kk = k->k, s = GAUSS2_S;                                                               \
+    /* gauss.py _midpoint_increment image: W -> h/2 f(y + W) */                                               \
+    GAUSS_INLINE void model##_midpoint_image(const consts *k, double x, double y, double vx, double vy,      \
+                                              const double *w, double hh, double *n) {                        \
+        double mvx = vx + w[2], mvy = vy + w[3], fx, fy;                                                      \
+        model##_acceleration(k, x + w[0], y + w[1], mvx, mvy, &fx, &fy);                                      \
+        n[0] = hh * mvx; n[1] = hh * mvy; n[2] = hh * fx; n[3] = hh * fy;                                     \
+    }                                                                                                         \
+    GAUSS_INLINE void model##_implicit_midpoint_increment(const consts *k, double h, double x, double y,    \
+                                                           double vx, double vy, double *d) {                \
+        double ax, ay, kk = k->k, hh = 0.5 * h, w[4], n[4], j[8], inv[4];                                     \
         model##_acceleration(k, x, y, vx, vy, &ax, &ay);                                                      \
         double scale = kk * (fabs(x) + fabs(y)) + fabs(vx) + fabs(vy) + 1e-300;                               \
-        double k1x = vx, k1y = vy, k1vx = ax, k1vy = ay, k2x = vx, k2y = vy, k2vx = ax, k2vy = ay;            \
-        double smallest = INFINITY;                                                                           \
-        int stalled = 0, converged = 0;                                                                       \
+        w[0] = hh * vx; w[1] = hh * vy; w[2] = hh * ax; w[3] = hh * ay;                                       \
+        double change = INFINITY;                                                                             \
         for (int sweep = 0; sweep < MAX_SWEEPS; sweep++) {                                                    \
-            double qx = 0.25 * (k1x + k2x), qy = 0.25 * (k1y + k2y);                                          \
-            double qvx = 0.25 * (k1vx + k2vx), qvy = 0.25 * (k1vy + k2vy);                                    \
-            double u1x = vx + h * (qvx - s * k2vx), u1y = vy + h * (qvy - s * k2vy);                          \
-            double u2x = vx + h * (qvx + s * k1vx), u2y = vy + h * (qvy + s * k1vy);                          \
-            double b1x, b1y, b2x, b2y;                                                                        \
-            model##_acceleration(k, x + h * (qx - s * k2x), y + h * (qy - s * k2y), u1x, u1y, &b1x, &b1y);    \
-            model##_acceleration(k, x + h * (qx + s * k1x), y + h * (qy + s * k1y), u2x, u2y, &b2x, &b2y);    \
-            double increment = sqrt(                                                                          \
-                squared_norm(h * (u1x - k1x), h * (u1y - k1y), h * (b1x - k1vx), h * (b1y - k1vy), kk) +          \
-                squared_norm(h * (u2x - k2x), h * (u2y - k2y), h * (b2x - k2vx), h * (b2y - k2vy), kk)) / scale;  \
-            k1x = u1x; k1y = u1y; k1vx = b1x; k1vy = b1y;                                                     \
-            k2x = u2x; k2y = u2y; k2vx = b2x; k2vy = b2y;                                                     \
-            if (sweep_verdict(increment, &smallest, &stalled, &converged)) break;                             \
+            model##_midpoint_image(k, x, y, vx, vy, w, hh, n);                                                \
+            change = sqrt(squared_norm(n[0] - w[0], n[1] - w[1], n[2] - w[2], n[3] - w[3], kk)) / scale;       \
+            w[0] = n[0]; w[1] = n[1]; w[2] = n[2]; w[3] = n[3];                                               \
+            if (change <= NEWTON_START_INCREMENT || !(change <= DIVERGED_INCREMENT)) break;                   \
+        }                                                                                                     \
+        if (!(change <= NEWTON_START_INCREMENT)) { d[0] = d[1] = d[2] = d[3] = NAN; return; }                 \
+        model##_difference_jacobian(k, x, y, vx, vy, ax, ay, DIFFERENCE_STEP * scale / kk,                    \
+                                    DIFFERENCE_STEP * scale, j);                                              \
+        double hh2 = hh * hh;                                                                                 \
+        inverse2(1.0 - hh * j[4] - hh2 * j[0], -hh * j[5] - hh2 * j[1], -hh * j[6] - hh2 * j[2],              \
+                 1.0 - hh * j[7] - hh2 * j[3], inv);                                                          \
+        double previous = INFINITY;                                                                           \
+        int converged = 0;                                                                                    \
+        for (int iteration = 0; iteration < NEWTON_ITERATIONS; iteration++) {                                 \
+            model##_midpoint_image(k, x, y, vx, vy, w, hh, n);                                                \
+            double gx = n[0] - w[0], gy = n[1] - w[1], gvx = n[2] - w[2], gvy = n[3] - w[3];                  \
+            double cx = gvx + hh * (j[0] * gx + j[1] * gy);                                                   \
+            double cy = gvy + hh * (j[2] * gx + j[3] * gy);                                                   \
+            double dvx = inv[0] * cx + inv[1] * cy, dvy = inv[2] * cx + inv[3] * cy;                          \
+            double dx = gx + hh * dvx, dy = gy + hh * dvy;                                                    \
+            change = sqrt(squared_norm(dx, dy, dvx, dvy, kk)) / scale;                                        \
+            w[0] = w[0] + dx; w[1] = w[1] + dy; w[2] = w[2] + dvx; w[3] = w[3] + dvy;                         \
+            converged = newton_converged(change, previous);                                                   \
+            if (converged) break;                                                                             \
+            previous = change;                                                                                \
         }                                                                                                     \
         if (!converged) { d[0] = d[1] = d[2] = d[3] = NAN; return; }                                          \
+        model##_midpoint_image(k, x, y, vx, vy, w, hh, n);                                                    \
+        d[0] = 2.0 * n[0]; d[1] = 2.0 * n[1]; d[2] = 2.0 * n[2]; d[3] = 2.0 * n[3];                          \
+    }                                                                                                         \
+    /* gauss.py _gauss2_increment image: K -> f(y + h A K); kk[0..3] = K1, kk[4..7] = K2 */                   \
+    GAUSS_INLINE void model##_gauss2_image(const consts *k, double x, double y, double vx, double vy,        \
+                                            const double *kk, double h, double *n) {                          \
+        double s = GAUSS2_S;                                                                                  \
+        double qx = 0.25 * (kk[0] + kk[4]), qy = 0.25 * (kk[1] + kk[5]);                                      \
+        double qvx = 0.25 * (kk[2] + kk[6]), qvy = 0.25 * (kk[3] + kk[7]);                                    \
+        n[0] = vx + h * (qvx - s * kk[6]); n[1] = vy + h * (qvy - s * kk[7]);                                 \
+        n[4] = vx + h * (qvx + s * kk[2]); n[5] = vy + h * (qvy + s * kk[3]);                                 \
+        model##_acceleration(k, x + h * (qx - s * kk[4]), y + h * (qy - s * kk[5]), n[0], n[1], &n[2], &n[3]); \
+        model##_acceleration(k, x + h * (qx + s * kk[0]), y + h * (qy + s * kk[1]), n[4], n[5], &n[6], &n[7]); \
+    }                                                                                                         \
+    GAUSS_INLINE void model##_gauss_legendre4_increment(const consts *k, double h, double x, double y,      \
+                                                         double vx, double vy, double *d) {                  \
+        double ax, ay, kn = k->k, kk[8], n[8], j[8];                                                          \
+        model##_acceleration(k, x, y, vx, vy, &ax, &ay);                                                      \
+        double scale = kn * (fabs(x) + fabs(y)) + fabs(vx) + fabs(vy) + 1e-300;                               \
+        kk[0] = vx; kk[1] = vy; kk[2] = ax; kk[3] = ay; kk[4] = vx; kk[5] = vy; kk[6] = ax; kk[7] = ay;       \
+        double change = INFINITY;                                                                             \
+        for (int sweep = 0; sweep < MAX_SWEEPS; sweep++) {                                                    \
+            model##_gauss2_image(k, x, y, vx, vy, kk, h, n);                                                  \
+            change = sqrt(                                                                                    \
+                squared_norm(h * (n[0] - kk[0]), h * (n[1] - kk[1]), h * (n[2] - kk[2]), h * (n[3] - kk[3]), kn) + \
+                squared_norm(h * (n[4] - kk[4]), h * (n[5] - kk[5]), h * (n[6] - kk[6]), h * (n[7] - kk[7]), kn)) \
+                / scale;                                                                                      \
+            for (int i = 0; i < 8; i++) kk[i] = n[i];                                                         \
+            if (change <= NEWTON_START_INCREMENT || !(change <= DIVERGED_INCREMENT)) break;                   \
+        }                                                                                                     \
+        if (!(change <= NEWTON_START_INCREMENT)) { d[0] = d[1] = d[2] = d[3] = NAN; return; }                 \
+        model##_difference_jacobian(k, x, y, vx, vy, ax, ay, DIFFERENCE_STEP * scale / kn,                    \
+                                    DIFFERENCE_STEP * scale, j);                                              \
+        double a12 = 0.25 - GAUSS2_S, a21 = 0.25 + GAUSS2_S, h2 = h * h;                                      \
+        double d11 = h2 * (0.0625 + a12 * a21), d12 = h2 * (0.5 * a12), d21 = h2 * (0.5 * a21);               \
+        double q[4] = {1.0 - 0.25 * h * j[4] - d11 * j[0], -0.25 * h * j[5] - d11 * j[1],                     \
+                       -0.25 * h * j[6] - d11 * j[2], 1.0 - 0.25 * h * j[7] - d11 * j[3]};                     \
+        double p[4] = {-a12 * h * j[4] - d12 * j[0], -a12 * h * j[5] - d12 * j[1],                            \
+                       -a12 * h * j[6] - d12 * j[2], -a12 * h * j[7] - d12 * j[3]};                            \
+        double p21[4] = {-a21 * h * j[4] - d21 * j[0], -a21 * h * j[5] - d21 * j[1],                          \
+                         -a21 * h * j[6] - d21 * j[2], -a21 * h * j[7] - d21 * j[3]};                          \
+        double qi[4], t[4], wm[4], si[4];                                                                     \
+        inverse2(q[0], q[1], q[2], q[3], qi);                                                                 \
+        product2(p21, qi, t);                                                                                 \
+        product2(t, p, wm);                                                                                   \
+        inverse2(q[0] - wm[0], q[1] - wm[1], q[2] - wm[2], q[3] - wm[3], si);                                  \
+        double previous = INFINITY;                                                                           \
+        int converged = 0;                                                                                    \
+        for (int iteration = 0; iteration < NEWTON_ITERATIONS; iteration++) {                                 \
+            model##_gauss2_image(k, x, y, vx, vy, kk, h, n);                                                  \
+            double g1x = n[0] - kk[0], g1y = n[1] - kk[1], g1vx = n[2] - kk[2], g1vy = n[3] - kk[3];          \
+            double g2x = n[4] - kk[4], g2y = n[5] - kk[5], g2vx = n[6] - kk[6], g2vy = n[7] - kk[7];          \
+            double s1x = h * (0.25 * g1x + a12 * g2x), s1y = h * (0.25 * g1y + a12 * g2y);                    \
+            double s2x = h * (a21 * g1x + 0.25 * g2x), s2y = h * (a21 * g1y + 0.25 * g2y);                    \
+            double c1x = g1vx + j[0] * s1x + j[1] * s1y, c1y = g1vy + j[2] * s1x + j[3] * s1y;                \
+            double c2x = g2vx + j[0] * s2x + j[1] * s2y, c2y = g2vy + j[2] * s2x + j[3] * s2y;                \
+            double ex = c2x - (t[0] * c1x + t[1] * c1y), ey = c2y - (t[2] * c1x + t[3] * c1y);                \
+            double e2vx = si[0] * ex + si[1] * ey, e2vy = si[2] * ex + si[3] * ey;                            \
+            ex = c1x - (p[0] * e2vx + p[1] * e2vy); ey = c1y - (p[2] * e2vx + p[3] * e2vy);                   \
+            double e1vx = qi[0] * ex + qi[1] * ey, e1vy = qi[2] * ex + qi[3] * ey;                            \
+            double e1x = g1x + h * (0.25 * e1vx + a12 * e2vx), e1y = g1y + h * (0.25 * e1vy + a12 * e2vy);    \
+            double e2x = g2x + h * (a21 * e1vx + 0.25 * e2vx), e2y = g2y + h * (a21 * e1vy + 0.25 * e2vy);    \
+            change = h * sqrt(squared_norm(e1x, e1y, e1vx, e1vy, kn) + squared_norm(e2x, e2y, e2vx, e2vy, kn)) \
+                / scale;                                                                                      \
+            kk[0] = kk[0] + e1x; kk[1] = kk[1] + e1y; kk[2] = kk[2] + e1vx; kk[3] = kk[3] + e1vy;             \
+            kk[4] = kk[4] + e2x; kk[5] = kk[5] + e2y; kk[6] = kk[6] + e2vx; kk[7] = kk[7] + e2vy;             \
+            converged = newton_converged(change, previous);                                                   \
+            if (converged) break;                                                                             \
+            previous = change;                                                                                \
+        }                                                                                                     \
+        if (!converged) { d[0] = d[1] = d[2] = d[3] = NAN; return; }                                          \
+        model##_gauss2_image(k, x, y, vx, vy, kk, h, n);                                                      \
         double half = 0.5 * h;                                                                                \
-        d[0] = half * (k1x + k2x);                                                                            \
-        d[1] = half * (k1y + k2y);                                                                            \
-        d[2] = half * (k1vx + k2vx);                                                                          \
-        d[3] = half * (k1vy + k2vy);                                                                          \
+        d[0] = half * (n[0] + n[4]);                                                                          \
+        d[1] = half * (n[1] + n[5]);                                                                          \
+        d[2] = half * (n[2] + n[6]);                                                                          \
+        d[3] = half * (n[3] + n[7]);                                                                          \
     }
 DEFINE_GAUSS_STEPS(linear)
 DEFINE_GAUSS_STEPS(spherical)
