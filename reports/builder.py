@@ -27,7 +27,7 @@ from foucault_bench.reports.document import Block, Figure, Page, Paragraph, Tabl
 from foucault_bench.reports.figure_cache import FigureCache, Unhashable, digest
 
 if TYPE_CHECKING:
-    from plotly.graph_objects import Figure as PlotlyFigure
+    from foucault_bench.reports.plotly_figure import Plot
 
 FIGURES = "figures"
 TABLES = "tables"
@@ -164,7 +164,7 @@ class Builder:
         self.current.blocks.append(Paragraph(""))
 
     def figure(self, name: str, caption: str, draw: Callable[[Path], Path],
-               draw_interactive: Callable[[], PlotlyFigure] | None = None, beside: bool = False) -> None:
+               draw_interactive: Callable[[], Plot] | None = None, beside: bool = False) -> None:
         """Add a chart to the page; ``draw_figures`` later writes the static chart ``draw(stem)`` under figures/
         (when the report is static) and, when the report is interactive, puts the plotly figure
         ``draw_interactive()`` on the page; ``beside``: to the right of the table just added."""
@@ -232,7 +232,7 @@ class Builder:
 
 
 def _render_figure(block: Figure, stem: Path, draw: Callable[[Path], Path],
-                   draw_interactive: Callable[[], PlotlyFigure] | None) -> list[Block]:
+                   draw_interactive: Callable[[], Plot] | None) -> list[Block]:
     """Draw one chart: its static files when ``block.static``, its plotly figure when ``draw_interactive``."""
     if block.static:
         draw(stem)

@@ -1,7 +1,7 @@
 """The report's interactive charts: plotly figures for index.html, drawn from the same data as ``reports.charts``.
 
-Each function returns a ``plotly.graph_objects.Figure`` (plotly: https://plotly.com/python/); the document
-embeds its JSON and plotly.js is written beside index.html (``PLOTLY_JS``), so the page opens offline. In every
+Each function returns a plotly figure (plotly: https://plotly.com/python/) as plain data
+(``reports.plotly_figure.Plot``, built without plotly's per-property checking); the document embeds its JSON and plotly.js is written beside index.html (``PLOTLY_JS``), so the page opens offline. In every
 chart of results rows, hovering a point shows the run (integrator, family, setting, error, CPU and wall time,
 right-hand-side evaluations, steps, status); clicking a legend entry hides that integrator, clicking the
 "all <family>" entry hides or shows the whole family (``LEGEND_SCRIPT``); axes are logarithmic. The charts of
@@ -18,12 +18,11 @@ import textwrap
 
 import numpy as np
 import pandas as pd
-import plotly.graph_objects as go
-from plotly.subplots import make_subplots
 
 from foucault_bench.bench.schema import STATUS_TIMEOUT, setting_label
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK
 from foucault_bench.reports import chart_style, charts
+from foucault_bench.reports.plotly_figure import Plot, Trace, data_array, scatter, subplots
 
 PLOTLY_JS = "plotly.min.js"
 """File name of plotly.js in the report folder."""
@@ -58,40 +57,57 @@ def _text(value: object) -> str:
     return str(value)
 
 
+def _texts(values: pd.Series) -> list[str]:
+    """``_text`` of each value of a column (numbers converted once per column)."""
+    if pd.api.types.is_numeric_dtype(values) and not pd.api.types.is_bool_dtype(values):
+        return [chart_style.number_text(value) for value in values.to_numpy(dtype=float, na_value=math.nan)]
+    return [_text(value) for value in values.tolist()]
+
+
 def _hover(rows: pd.DataFrame, error_column: str) -> list[list[str]]:
-    """customdata rows (``HOVER_FIELDS``) of results rows."""
-    data = []
-    needed = [column for column in dict.fromkeys((*HOVER_FIELDS, "kh", "tol", error_column)) if column in rows]
-    for row in rows[needed].to_dict("records"):  # only the shown columns: a whole results row is slow to convert
-        values = {**row, "setting": setting_label(row.get("kh"), row.get("tol")),
-                  "error": abs(row[error_column]) if row.get(error_column) is not None else math.nan}
-        data.append([_text(values.get(field, math.nan)) for field in HOVER_FIELDS])
-    return data
+    """customdata rows (``HOVER_FIELDS``) of results rows, built a column at a time."""
+    missing = ["–"] * len(rows)
+    kh = rows["kh"].tolist() if "kh" in rows else [None] * len(rows)
+    tol = rows["tol"].tolist() if "tol" in rows else [None] * len(rows)
+    error = (rows[error_column].abs() if error_column in rows else pd.Series(math.nan, index=rows.index))
+    columns = {"setting": [setting_label(step, tolerance) for step, tolerance in zip(kh, tol, strict=True)],
+               "error": _texts(error)}
+    texts = [columns[field] if field in columns else _texts(rows[field]) if field in rows else missing
+             for field in HOVER_FIELDS]
+    return [list(row) for row in zip(*texts, strict=True)]
 
 
-def legend_layout(figure: go.Figure, title: str) -> go.Figure:
-    figure.update_layout(title=title, template="plotly_white", height=520,
-                         legend={"groupclick": "toggleitem", "font": {"size": 11}},
+def legend_layout(figure: Plot, title: str) -> Plot:
+    """The title, size, legend and margins of every chart of the page (the template: ``Plot.to_json``)."""
+    figure.update_layout(title={"text": title}, height=520, legend={"groupclick": "toggleitem", "font": {"size": 11}},
                          margin={"l": 70, "r": 20, "t": 60, "b": 60}, hovermode="closest")
-    figure.update_xaxes(exponentformat="power")
-    figure.update_yaxes(exponentformat="power")
+    figure.update_axes("x", exponentformat="power")
+    figure.update_axes("y", exponentformat="power")
     return figure
 
 
-def _family_entry(family: str, colour: str) -> go.Scatter:
+def _family_entry(family: str, colour: str) -> Trace:
     """A legend entry without data; a click on it shows or hides every trace of the family (``LEGEND_SCRIPT``)."""
-    return go.Scatter(x=[None], y=[None], mode="markers", name=f"all {family}", legendgroup=family,
-                      legendgrouptitle_text=family, marker={"color": colour, "symbol": "square", "size": 10},
-                      meta="family-toggle", hoverinfo="skip")
+    return scatter(x=[None], y=[None], mode="markers", name=f"all {family}", legendgroup=family,
+                   legendgrouptitle={"text": family}, marker={"color": colour, "symbol": "square", "size": 10},
+                   meta="family-toggle", hoverinfo="skip")
 
 
-def add_sweeps(figure: go.Figure, frame: pd.DataFrame, x_column: str, y_column: str, *, row: int = 1, col: int = 1,
+SWEEP_COLUMNS = ("integrator", "family", "status", "kh", "tol", *HOVER_FIELDS)
+"""The columns of results rows a chart of sweeps reads (with its x, y and bar columns)."""
+
+
+def add_sweeps(figure: Plot, frame: pd.DataFrame, x_column: str, y_column: str, *, row: int = 1, col: int = 1,
                legend: bool = True, x_spread: str | None = None, top: float | None = None) -> None:
     """One trace per integrator through its ok runs (``chart_style.sweeps``) and, when ``top`` is given, as the static
     charts draw them on their edges: one per integrator for its diverged and failed runs above the data at
     ``top`` (▲, ✕; "<integrator> not ok") and one for its ok runs without a plottable value below the data
     (▽, ``_bottom``; "<integrator> no value"), each at its x, or left of every run's x when that is unknown
     (``_left``)."""
+    shown = dict.fromkeys((*SWEEP_COLUMNS, x_column, y_column, *([x_spread] if x_spread else [])))
+    # only the columns drawn or shown: a whole results row is slow to copy into each sweep
+    frame = frame[[column for column in shown if column in frame]].reset_index(drop=True)  # index = position
+    hover = _hover(frame, y_column)  # every row's, once: a sweep's are hover[label] for its rows' labels
     families_seen: set[str] = set()
     left, left_slots = _left(frame, x_column), {"not ok": 0, "no value": 0}
     bottom = _bottom(frame, y_column)
@@ -101,18 +117,18 @@ def add_sweeps(figure: go.Figure, frame: pd.DataFrame, x_column: str, y_column: 
             figure.add_trace(_family_entry(sweep.family, style["color"]), row=row, col=col)
         families_seen.add(sweep.family)
         points = sweep.points
-        error_x = None
-        if x_spread is not None and x_spread in points and points[x_spread].notna().any():
-            half = 0.5 * points[x_spread].to_numpy(float)
-            error_x = {"type": "data", "symmetric": False, "array": half,
-                       "arrayminus": np.minimum(half, 0.9 * points[x_column].to_numpy(float)), "thickness": 1,
-                       "width": 2}
-        figure.add_trace(go.Scatter(
-            x=points[x_column], y=points[y_column], mode="lines+markers", name=sweep.label,
-            legendgroup=sweep.family, showlegend=legend, error_x=error_x,
+        line = scatter(
+            x=data_array(points[x_column]), y=data_array(points[y_column]), mode="lines+markers", name=sweep.label,
+            legendgroup=sweep.family, showlegend=legend,
             line={"color": style["color"], "dash": _dash(style["linestyle"]), "width": 1.5},
             marker={"symbol": SYMBOLS.get(style["marker"], "circle"), "size": 7, "color": style["color"]},
-            customdata=_hover(points, y_column), hovertemplate=RUN_HOVER), row=row, col=col)
+            customdata=[hover[label] for label in points.index], hovertemplate=RUN_HOVER)
+        if x_spread is not None and x_spread in points and points[x_spread].notna().any():
+            half = 0.5 * points[x_spread].to_numpy(float)
+            line["error_x"] = {"type": "data", "symmetric": False, "array": data_array(half),
+                               "arrayminus": data_array(np.minimum(half, 0.9 * points[x_column].to_numpy(float))),
+                               "thickness": 1, "width": 2}
+        figure.add_trace(line, row=row, col=col)
         if top is None:
             continue
         for edge_rows, edge_y, name in ((pd.concat([sweep.diverged, sweep.failed]), top, "not ok"),
@@ -125,11 +141,11 @@ def add_sweeps(figure: go.Figure, frame: pd.DataFrame, x_column: str, y_column: 
             left_slots[name] += int(unknown.sum())
             symbols = [EDGE_SYMBOLS.get(status, "triangle-down") if name == "not ok" else "triangle-down"
                        for status in edge_rows["status"]]
-            figure.add_trace(go.Scatter(
-                x=x, y=np.full(len(edge_rows), edge_y), mode="markers", name=f"{sweep.integrator} {name}",
-                legendgroup=sweep.family, showlegend=False,
+            figure.add_trace(scatter(
+                x=data_array(x), y=data_array(np.full(len(edge_rows), edge_y)), mode="markers",
+                name=f"{sweep.integrator} {name}", legendgroup=sweep.family, showlegend=False,
                 marker={"symbol": symbols, "size": 9, "color": style["color"], "line": {"width": 1, "color": "black"}},
-                customdata=_hover(edge_rows, y_column), hovertemplate=RUN_HOVER), row=row, col=col)
+                customdata=[hover[label] for label in edge_rows.index], hovertemplate=RUN_HOVER), row=row, col=col)
 
 
 LEFT_EDGE_STEP = 0.8
@@ -170,59 +186,61 @@ def _wrapped(label: str) -> str:
     return "<br>".join(textwrap.wrap(" ".join(label.split()), AXIS_TITLE_CHARACTERS))
 
 
-def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame) -> go.Figure:
+def work_precision(scene_frame: pd.DataFrame, verdict: str, front: pd.DataFrame) -> Plot:
     """``charts.work_precision`` for the page: verdict against time (with the Pareto envelope and the 95 %
     confidence interval of each median CPU time) and against accepted steps."""
     scene = scene_frame["scene"].iloc[0]
     title, label = charts.VERDICT_LABELS[verdict]
     time_cost, steps = charts.cost_axes(scene_frame)
     scene_frame = charts.with_cost_bars(scene_frame)
-    figure = make_subplots(rows=1, cols=2, shared_yaxes=True, horizontal_spacing=0.04)
+    figure = subplots(rows=1, cols=2, shared_yaxes=True, horizontal_spacing=0.04)
     top = _top(scene_frame, verdict)
     for col, cost in ((1, time_cost), (2, steps)):
         add_sweeps(figure, scene_frame, cost, verdict, col=col, legend=col == 1,
                    x_spread=charts.COST_SPREADS.get(cost), top=top)
-        figure.update_xaxes(type="log", title_text=_wrapped(charts.COST_LABELS[cost]), automargin=True, row=1, col=col)
+        figure.update_axes("x", type="log", title={"text": _wrapped(charts.COST_LABELS[cost])}, automargin=True,
+                           row=1, col=col)
     if not front.empty:
-        figure.add_trace(go.Scatter(x=front[time_cost], y=front["error"], mode="lines", line_shape="hv",
-                                    name="Pareto front", line={"color": "rgba(0,0,0,0.35)", "width": 4},
-                                    hoverinfo="skip"), row=1, col=1)
-    figure.update_yaxes(type="log")
-    figure.update_yaxes(title_text=label, row=1, col=1)
+        figure.add_trace(scatter(x=data_array(front[time_cost]), y=data_array(front["error"]), mode="lines",
+                                 name="Pareto front", line={"color": "rgba(0,0,0,0.35)", "width": 4, "shape": "hv"},
+                                 hoverinfo="skip"), row=1, col=1)
+    figure.update_axes("y", type="log")
+    figure.update_axes("y", title={"text": label}, row=1, col=1)
     return legend_layout(figure, f"{scene}: {title} against cost (lower left is better)")
 
 
-def convergence(scene_frame: pd.DataFrame, orders: dict[str, float]) -> go.Figure:
+def convergence(scene_frame: pd.DataFrame, orders: dict[str, float]) -> Plot:
     """``charts.convergence`` for the page: reference error against k·h with a reference slope per order."""
     scene = scene_frame["scene"].iloc[0]
     fixed = scene_frame[scene_frame["tol"].isna()]
-    figure = make_subplots(rows=1, cols=1)
+    figure = subplots(rows=1, cols=1)
     add_sweeps(figure, fixed, "kh", "reference_error", top=_top(fixed, "reference_error"))
     for trace in figure.data:
-        fitted = orders.get(str(trace.name).split(" (")[0])
-        if fitted is not None and trace.meta != "family-toggle" and trace.showlegend is not False:
-            trace.name = f"{trace.name}, " + ("no fit" if not np.isfinite(fitted) else f"fitted order {fitted:.2f}")
+        fitted = orders.get(str(trace["name"]).split(" (")[0])
+        if fitted is not None and trace.get("meta") != "family-toggle" and trace.get("showlegend") is not False:
+            trace["name"] = f"{trace['name']}, " + ("no fit" if not np.isfinite(fitted) else f"fitted order {fitted:.2f}")
     points = {sweep.integrator: sweep.points for sweep in chart_style.sweeps(fixed, "kh", "reference_error")}
     for order, kh, error in charts.reference_slopes(fixed, points):
-        figure.add_trace(go.Scatter(x=kh, y=error, mode="lines", name=f"slope {order}",
-                                    line={"color": "grey", "dash": "dot", "width": 1}, hoverinfo="name"))
-    figure.update_xaxes(type="log", title_text="k·h (step in units of 1/k = √(L/g))")
-    figure.update_yaxes(type="log", title_text="reference error, max |r − r_ref| / A")
+        figure.add_trace(scatter(x=data_array(kh), y=data_array(error), mode="lines", name=f"slope {order}",
+                                 line={"color": "grey", "dash": "dot", "width": 1}, hoverinfo="name"))
+    figure.update_axes("x", type="log", title={"text": "k·h (step in units of 1/k = √(L/g))"})
+    figure.update_axes("y", type="log", title={"text": "reference error, max |r − r_ref| / A"})
     return legend_layout(figure, f"{scene}: convergence of the fixed-step integrators")
 
 
-def tolerance(scene_frame: pd.DataFrame) -> go.Figure:
+def tolerance(scene_frame: pd.DataFrame) -> Plot:
     """``charts.tolerance`` for the page: achieved reference error against requested tolerance."""
     scene = scene_frame["scene"].iloc[0]
     adaptive = scene_frame[scene_frame["tol"].notna()]
-    figure = make_subplots(rows=1, cols=1)
+    figure = subplots(rows=1, cols=1)
     add_sweeps(figure, adaptive, "tol", "reference_error", top=_top(adaptive, "reference_error"))
     tol = adaptive["tol"].to_numpy(float)
     if tol.size:
-        figure.add_trace(go.Scatter(x=[tol.min(), tol.max()], y=[tol.min(), tol.max()], mode="lines",
-                                    name="error = tolerance", line={"color": "grey", "dash": "dot", "width": 1}))
-    figure.update_xaxes(type="log", autorange="reversed", title_text="requested tolerance (tighter to the right)")
-    figure.update_yaxes(type="log", title_text="reference error, max |r − r_ref| / A")
+        span = [float(tol.min()), float(tol.max())]
+        figure.add_trace(scatter(x=span, y=span, mode="lines", name="error = tolerance",
+                                 line={"color": "grey", "dash": "dot", "width": 1}))
+    figure.update_axes("x", type="log", autorange="reversed", title={"text": "requested tolerance (tighter to the right)"})
+    figure.update_axes("y", type="log", title={"text": "reference error, max |r − r_ref| / A"})
     return legend_layout(figure, f"{scene}: achieved error against requested tolerance")
 
 
@@ -231,25 +249,26 @@ def tolerance(scene_frame: pd.DataFrame) -> go.Figure:
 # --------------------------------------------------------------------------------------------------------------
 # the page
 # --------------------------------------------------------------------------------------------------------------
-def drawn_points(figure: go.Figure) -> int:
+def drawn_points(figure: Plot) -> int:
     """How many markers plotly draws for ``figure``: points of marker traces with finite coordinates (and
     positive ones on log axes). The browser test compares this with the markers found on the page."""
     layout = figure.layout
     count = 0
     for trace in figure.data:
-        if "markers" not in (trace.mode or "") or trace.x is None or trace.y is None:
+        if "markers" not in (trace.get("mode") or "") or trace.get("x") is None or trace.get("y") is None:
             continue
-        x_axis = layout[("xaxis" + str(trace.xaxis or "x")[1:])]
-        y_axis = layout[("yaxis" + str(trace.yaxis or "y")[1:])]
-        x = pd.to_numeric(pd.Series(list(trace.x)), errors="coerce").to_numpy(float) \
-            if x_axis.type != "category" else np.zeros(len(trace.x))
-        y = pd.to_numeric(pd.Series(list(trace.y)), errors="coerce").to_numpy(float)
-        if len(y) and np.all(np.isnan(y)) and len(trace.y) and isinstance(list(trace.y)[0], str):
-            y = np.zeros(len(trace.y))  # categorical y (the adequacy chart's labels)
+        x_axis = layout.get("xaxis" + str(trace.get("xaxis") or "x")[1:], {})
+        y_axis = layout.get("yaxis" + str(trace.get("yaxis") or "y")[1:], {})
+        trace_x, trace_y = list(trace["x"]), list(trace["y"])
+        x = pd.to_numeric(pd.Series(trace_x), errors="coerce").to_numpy(float) \
+            if x_axis.get("type") != "category" else np.zeros(len(trace_x))
+        y = pd.to_numeric(pd.Series(trace_y), errors="coerce").to_numpy(float)
+        if len(y) and np.all(np.isnan(y)) and isinstance(trace_y[0], str):
+            y = np.zeros(len(trace_y))  # categorical y (the adequacy chart's labels)
         keep = np.isfinite(x) & np.isfinite(y)
-        if x_axis.type == "log":
+        if x_axis.get("type") == "log":
             keep &= x > 0
-        if y_axis.type == "log":
+        if y_axis.get("type") == "log":
             keep &= y > 0
         count += int(keep.sum())
     return count

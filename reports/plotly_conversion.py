@@ -13,15 +13,14 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-import plotly.graph_objects as go
 from matplotlib.collections import PolyCollection
 from matplotlib.colors import to_hex
 from matplotlib.container import ErrorbarContainer
 from matplotlib.figure import Figure as MplFigure
 from matplotlib.ticker import FixedLocator
-from plotly.subplots import make_subplots
 
 from foucault_bench.reports.interactive import SYMBOLS, legend_layout
+from foucault_bench.reports.plotly_figure import Plot, Trace, data_array, scatter, subplots
 
 DASHES = {"-": "solid", "--": "dash", ":": "dot", "-.": "dashdot"}
 """matplotlib line style → plotly dash."""
@@ -82,12 +81,13 @@ def _error_arrays(container, x: np.ndarray, y: np.ndarray) -> dict[str, Any]:
         low = np.array([segment[:, index].min() for segment in segments])
         high = np.array([segment[:, index].max() for segment in segments])
         errors["error_y" if vertical else "error_x"] = {
-            "type": "data", "symmetric": False, "array": high - centre, "arrayminus": centre - low,
+            "type": "data", "symmetric": False, "array": data_array(high - centre),
+            "arrayminus": data_array(centre - low),
             "color": to_hex(collection.get_colors()[0]), "thickness": 1, "width": 3}
     return errors
 
 
-def _line_trace(axes, line, errors: dict[str, Any], legend_names: set[str], labelled_colours: set[str]) -> go.Scatter:
+def _line_trace(axes, line, errors: dict[str, Any], legend_names: set[str], labelled_colours: set[str]) -> Trace:
     """A plotly trace of a matplotlib line (in data coordinates whatever transform it was drawn in)."""
     xy = _data_coordinates(axes, line.get_transform(), line.get_xydata())
     colour = to_hex(line.get_color())
@@ -100,14 +100,14 @@ def _line_trace(axes, line, errors: dict[str, Any], legend_names: set[str], labe
     has_marker = line.get_marker() not in (None, "None", "", " ")
     has_line = linestyle not in ("None", "", " ")
     mode = "+".join(part for part, present in (("lines", has_line), ("markers", has_marker)) if present) or "markers"
-    return go.Scatter(
-        x=xy[:, 0], y=xy[:, 1], mode=mode, name=name, legendgroup=name, showlegend=shown,
+    return scatter(
+        x=data_array(xy[:, 0]), y=data_array(xy[:, 1]), mode=mode, name=name, legendgroup=name, showlegend=shown,
         line={"color": colour, "dash": DASHES.get(linestyle, "solid"), "width": float(line.get_linewidth())},
         marker=_marker(line), opacity=line.get_alpha() if line.get_alpha() is not None else 1.0,
         hovertemplate=f"{name}<br>x %{{x:.4g}}<br>y %{{y:.4g}}<extra></extra>", **errors)
 
 
-def _add_patches(plot: go.Figure, axes, row: int, col: int) -> None:
+def _add_patches(plot: Plot, axes, row: int, col: int) -> None:
     """Shaded spans (``axvspan``/``axhspan``: rectangles across the axes) as plotly rectangles, other patches
     and filled areas (``fill_between``) as filled traces in data coordinates."""
     for patch in axes.patches:
@@ -115,28 +115,28 @@ def _add_patches(plot: go.Figure, axes, row: int, col: int) -> None:
         fractions = _axes_fractions(axes, patch.get_transform(), path)
         data = _data_coordinates(axes, patch.get_transform(), path)
         face = patch.get_facecolor()
-        style = {"fillcolor": to_hex(face), "opacity": float(face[3]), "line_width": 0, "layer": "below"}
+        style = {"fillcolor": to_hex(face), "opacity": float(face[3]), "line": {"width": 0}, "layer": "below"}
         if np.allclose(sorted({round(v, 9) for v in fractions[:, 1]}), [0.0, 1.0]):
-            plot.add_vrect(x0=float(data[:, 0].min()), x1=float(data[:, 0].max()), row=row, col=col, **style)
+            plot.add_spanning("vrect", float(data[:, 0].min()), float(data[:, 0].max()), row, col, **style)
         elif np.allclose(sorted({round(v, 9) for v in fractions[:, 0]}), [0.0, 1.0]):
-            plot.add_hrect(y0=float(data[:, 1].min()), y1=float(data[:, 1].max()), row=row, col=col, **style)
+            plot.add_spanning("hrect", float(data[:, 1].min()), float(data[:, 1].max()), row, col, **style)
         else:
-            plot.add_trace(go.Scatter(x=data[:, 0], y=data[:, 1], fill="toself", mode="lines", showlegend=False,
-                                      fillcolor=to_hex(face, keep_alpha=True), line={"width": 0},
-                                      name=str(patch.get_label()), hoverinfo="skip"), row=row, col=col)
+            plot.add_trace(scatter(x=data_array(data[:, 0]), y=data_array(data[:, 1]), fill="toself", mode="lines",
+                                   showlegend=False, fillcolor=to_hex(face, keep_alpha=True), line={"width": 0},
+                                   name=str(patch.get_label()), hoverinfo="skip"), row=row, col=col)
     for collection in axes.collections:
         if not isinstance(collection, PolyCollection):
             continue
         faces: Any = collection.get_facecolor()  # an N×4 RGBA array (typed as one colour)
         for path in collection.get_paths():
             data = _data_coordinates(axes, collection.get_transform(), path.vertices)
-            plot.add_trace(go.Scatter(x=data[:, 0], y=data[:, 1], fill="toself", mode="lines", showlegend=False,
-                                      fillcolor=to_hex(faces[0], keep_alpha=True),
-                                      line={"width": 0}, name=str(collection.get_label()), hoverinfo="skip"),
-                          row=row, col=col)
+            plot.add_trace(scatter(x=data_array(data[:, 0]), y=data_array(data[:, 1]), fill="toself", mode="lines",
+                                   showlegend=False, fillcolor=to_hex(faces[0], keep_alpha=True),
+                                   line={"width": 0}, name=str(collection.get_label()), hoverinfo="skip"),
+                           row=row, col=col)
 
 
-def _add_texts(plot: go.Figure, axes, x_ref: str, y_ref: str) -> None:
+def _add_texts(plot: Plot, axes, x_ref: str, y_ref: str) -> None:
     """Texts written on a panel, at the same place relative to its axes."""
     for text in axes.texts:
         if not text.get_visible() or not text.get_text().strip():
@@ -148,7 +148,7 @@ def _add_texts(plot: go.Figure, axes, x_ref: str, y_ref: str) -> None:
                             font={"size": 10, "color": to_hex(text.get_color())})
 
 
-def from_matplotlib(figure: MplFigure) -> go.Figure:
+def from_matplotlib(figure: MplFigure) -> Plot:
     """A plotly figure with what a matplotlib figure draws in its panels, each in its own panel: the lines
     (colour, style, markers, hollow markers as open symbols, width, label) whatever coordinates they were drawn
     in (a marker on an axes edge stays on that edge, in data coordinates), reference lines (``axhline``,
@@ -164,15 +164,13 @@ def from_matplotlib(figure: MplFigure) -> go.Figure:
     panels = [cells[key] for key in sorted(cells)]  # plotly numbers its panels row by row
     specs: list[list[dict | None]] = [[{} if (row, col) in cells else None for col in range(geometry[1])]
                                       for row in range(geometry[0])]
-    plot = make_subplots(rows=geometry[0], cols=geometry[1], horizontal_spacing=0.08, specs=specs,
-                         vertical_spacing=min(0.3 / geometry[0], 0.12),
-                         subplot_titles=[axes.get_title() for axes in panels])
+    plot = subplots(rows=geometry[0], cols=geometry[1], horizontal_spacing=0.08, specs=specs,
+                    vertical_spacing=min(0.3 / geometry[0], 0.12), titles=[axes.get_title() for axes in panels])
     legend_names: set[str] = set()
     for axes in panels:
         spec = subplot_specs[axes]
         row, col = spec.rowspan.start + 1, spec.colspan.start + 1
-        subplot = plot.get_subplot(row, col)
-        x_ref, y_ref = (axis.plotly_name.replace("axis", "") for axis in (subplot.xaxis, subplot.yaxis))
+        x_ref, y_ref = plot.cells[(row, col)]
         containers = [c for c in axes.containers if isinstance(c, ErrorbarContainer)]
         caps = {id(cap) for container in containers for cap in container.lines[1]}
         errors_of = {id(container.lines[0]): container for container in containers if container.lines[0] is not None}
@@ -182,12 +180,9 @@ def from_matplotlib(figure: MplFigure) -> go.Figure:
         for line in lines:
             reference = _reference_line(axes, line)
             if reference is not None:
-                style = {"line_color": to_hex(line.get_color()), "line_width": float(line.get_linewidth()),
-                         "line_dash": DASHES.get(str(line.get_linestyle()), "solid")}
-                if reference[0] == "v":
-                    plot.add_vline(x=reference[1], row=row, col=col, **style)
-                else:
-                    plot.add_hline(y=reference[1], row=row, col=col, **style)
+                style = {"color": to_hex(line.get_color()), "width": float(line.get_linewidth()),
+                         "dash": DASHES.get(str(line.get_linestyle()), "solid")}
+                plot.add_spanning(f"{reference[0]}line", reference[1], reference[1], row, col, line=style)
                 continue
             container = errors_of.get(id(line))
             errors = {} if container is None else _error_arrays(
@@ -195,11 +190,13 @@ def from_matplotlib(figure: MplFigure) -> go.Figure:
             plot.add_trace(_line_trace(axes, line, errors, legend_names, labelled_colours), row=row, col=col)
         _add_patches(plot, axes, row, col)
         _add_texts(plot, axes, x_ref, y_ref)
-        plot.update_xaxes(title_text=axes.get_xlabel(), type="log" if axes.get_xscale() == "log" else "linear",
-                          row=row, col=col, **_ticks(axes.xaxis))
-        plot.update_yaxes(title_text=axes.get_ylabel(), type="log" if axes.get_yscale() == "log" else "linear",
-                          autorange="reversed" if axes.yaxis_inverted() else True, row=row, col=col,
-                          **_ticks(axes.yaxis))
+        plot.update_axes("x", title={"text": axes.get_xlabel()},
+                         type="log" if axes.get_xscale() == "log" else "linear", row=row, col=col,
+                         **_ticks(axes.xaxis))
+        plot.update_axes("y", title={"text": axes.get_ylabel()},
+                         type="log" if axes.get_yscale() == "log" else "linear",
+                         autorange="reversed" if axes.yaxis_inverted() else True, row=row, col=col,
+                         **_ticks(axes.yaxis))
     plot = legend_layout(plot, figure.get_suptitle())
     if geometry[0] > 1:
         plot.update_layout(height=PANEL_HEIGHT_PX * geometry[0] + 120)

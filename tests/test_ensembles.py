@@ -252,23 +252,24 @@ def test_report_charts_read_back_against_the_database(database: Path) -> None:
     rows = stored_rows(database)
     figure = recorder.charts["ensemble_fan_reference_error"]
     for trace in figure.data:
-        integrator, setting = trace.name.split(" ")
+        integrator, setting = trace["name"].split(" ")
         expected = sorted((json.loads(row["ensemble_member"])["release_azimuth_deg"], row["reference_error"])
                           for row in rows if row["integrator"] == integrator and row["ensemble_setting"] == setting)
-        drawn = np.column_stack([np.asarray(trace.x, dtype=float), np.asarray(trace.y, dtype=float)])
+        drawn = np.column_stack([np.asarray(trace["x"], dtype=float), np.asarray(trace["y"], dtype=float)])
         np.testing.assert_allclose(drawn, np.array(expected), rtol=1e-12, atol=0.0)
     assert len(figure.data) == 4
     work = recorder.charts["ensemble_fan_work_precision"]
     summary = recomputed_summary(rows, "reference_error")
     worst_by_name = {row["scene"] + row["integrator"] + row["ensemble_setting"]: row for row in rows}
-    first_panel = [trace for trace in work.data if trace.xaxis in (None, "x")]
+    first_panel = [trace for trace in work.data if trace.get("xaxis") in (None, "x")]
     for trace in first_panel:
-        expected = sorted((worst_by_name[summary[(trace.name, setting)]["worst_member"] + trace.name + setting]
-                           ["cpu_time_s"], summary[(trace.name, setting)]["worst"])
-                          for integrator, setting in summary if integrator == trace.name)
-        drawn = sorted(zip(np.asarray(trace.x, dtype=float), np.asarray(trace.y, dtype=float), strict=True))
+        name = trace["name"]
+        expected = sorted((worst_by_name[summary[(name, setting)]["worst_member"] + name + setting]
+                           ["cpu_time_s"], summary[(name, setting)]["worst"])
+                          for integrator, setting in summary if integrator == name)
+        drawn = sorted(zip(np.asarray(trace["x"], dtype=float), np.asarray(trace["y"], dtype=float), strict=True))
         np.testing.assert_allclose(np.array(drawn), np.array(expected), rtol=1e-12, atol=0.0)
-    assert {trace.name for trace in first_panel} == {"verlet", "rk4"}
+    assert {trace["name"] for trace in first_panel} == {"verlet", "rk4"}
 
 
 def same(first: object, second: object) -> bool:
