@@ -88,19 +88,22 @@ class Composition:
         """The smallest kh at which the composition of Verlet steps becomes unstable on ẍ = −k²x (first kh
         with |trace| ≥ 2 of the product of the sub-steps' matrices), by a scan then bisection."""
 
-        def half_trace(kh: float) -> float:
-            product = np.eye(2)
+        def half_trace(kh: np.ndarray) -> np.ndarray:
+            """½ trace of the product at every kh of the array ``kh`` at once (the 2×2 products elementwise)."""
+            p11, p12, p21, p22 = np.ones_like(kh), np.zeros_like(kh), np.zeros_like(kh), np.ones_like(kh)
             for gamma in self.weights:
                 s = gamma * kh  # Verlet on (x, v/k): kick, drift, kick with step s
-                product = np.array([[1.0 - 0.5 * s * s, s], [-s * (1.0 - 0.25 * s * s), 1.0 - 0.5 * s * s]]) @ product
-            return 0.5 * float(np.trace(product))
+                m11, m12, m21 = 1.0 - 0.5 * s * s, s, -s * (1.0 - 0.25 * s * s)
+                p11, p12, p21, p22 = (m11 * p11 + m12 * p21, m11 * p12 + m12 * p22,
+                                      m21 * p11 + m11 * p21, m21 * p12 + m11 * p22)
+            return 0.5 * (p11 + p22)
 
         grid = np.arange(1, int(kh_max / 1e-3) + 1) * 1e-3
-        unstable = next(kh for kh in grid if abs(half_trace(kh)) >= 1.0)
+        unstable = float(grid[np.argmax(np.abs(half_trace(grid)) >= 1.0)])
         low, high = unstable - 1e-3, unstable
         while high - low > resolution:
             middle = 0.5 * (low + high)
-            low, high = (low, middle) if abs(half_trace(middle)) >= 1.0 else (middle, high)
+            low, high = (low, middle) if abs(half_trace(np.array([middle]))[0]) >= 1.0 else (middle, high)
         return low
 
 

@@ -66,11 +66,13 @@ def rooted_trees(order: int) -> tuple[Tree, ...]:
     return tuple(sorted({bigger for tree in rooted_trees(order - 1) for bigger in _grown(tree)}))
 
 
+@functools.cache
 def tree_order(tree: Tree) -> int:
     """ρ(t): the number of nodes."""
     return 1 + sum(tree_order(child) for child in tree)
 
 
+@functools.cache
 def tree_density(tree: Tree) -> int:
     """γ(t) = ρ(t) Π γ(children) (HNW I, Definition II.2.10)."""
     return tree_order(tree) * math.prod(tree_density(child) for child in tree)

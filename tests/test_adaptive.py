@@ -45,6 +45,7 @@ from foucault_bench.integrators.methods.scipy_ivp import ScipyRk45
 from foucault_bench.models import MODELS, Model, PendulumParameters
 from foucault_bench.models.analytic import linear_exact, textbook_turning_azimuth
 from foucault_bench.models.parameters import P_K2, P_LENGTH
+from model_sets import refinement_leaves
 
 ADAPTIVE = [name for name in built_in_names() if REGISTRY[name].adaptive]
 SCENE = PendulumParameters(length_m=67.0, latitude_deg=48.846, amplitude_m=3.0)
@@ -90,11 +91,20 @@ ADAPTIVE_MODELS = ("linear", "seed_planar", "spherical")
 right-hand side: linear, velocity-dependent planar, constrained spherical). The real-pendulum models refine them
 with force terms that are zero at the Panthéon's parameters (no anisotropy, drag or drive): they are run at their
 declared example parameters instead (``REFINED_MODELS``), where those terms act; their right-hand sides are also
-checked against heyoka's there (tests/test_heyoka_rhs.py) and their order on every fixed-step integrator
+checked against heyoka's there (tests/test_heyoka_rhs.py) and their order on the fixed-step integrators
 (tests/test_selftest.py)."""
 REFINED_MODELS = tuple(name for name in MODELS if name not in ADAPTIVE_MODELS)
 """The real-pendulum models (an anisotropic support, drag, a drive), each run at ``Model.with_example_parameters``
 of this module's scene."""
+REFINED_LEAVES = tuple(name for name in REFINED_MODELS if name in refinement_leaves())
+"""The real-pendulum models no other model refines: each carries the force terms of the models it refines (the
+drive model its parent's drag), so every adaptive integrator is run on these, and the others on
+``FORCE_ACCESS_REPRESENTATIVES`` (one integrator × model product fewer to compile)."""
+FORCE_ACCESS_REPRESENTATIVES = ("dopri5", "cvode_bdf", "scipy_rk45", "heyoka_taylor")
+"""One adaptive integrator per way of reaching a model's right-hand side: the compiled acceleration inlined into
+a numba driver (dopri5, like every embedded pair, Nyström pair and extrapolation), the compiled right-hand side
+and Jacobian called by SUNDIALS (cvode_bdf), the compiled right-hand side called from Python (scipy_rk45) and the
+model's expression system compiled by heyoka (heyoka_taylor)."""
 
 
 def test_the_library_drivers_are_discovered() -> None:
@@ -157,9 +167,11 @@ def refined_run(name: str, model_name: str, tol: float) -> Solution:
 
 
 def refined_cases() -> list:
-    """(integrator, model) for every adaptive integrator and real-pendulum model."""
+    """(integrator, model) for every adaptive integrator and real-pendulum model that no other refines, and every
+    other real-pendulum model on ``FORCE_ACCESS_REPRESENTATIVES``."""
     return [pytest.param(name, model_name, id=f"{name}-{model_name}")
-            for name in ADAPTIVE for model_name in REFINED_MODELS]
+            for model_name in REFINED_MODELS for name in ADAPTIVE
+            if model_name in REFINED_LEAVES or name in FORCE_ACCESS_REPRESENTATIVES]
 
 
 @pytest.mark.parametrize("name, model_name", refined_cases())

@@ -350,6 +350,7 @@ def test_adaptive_batches_through_the_runner_equal_the_runs_alone(tmp_path: Path
 
 PICKY = '''
 """A test-only integrator (registered when imported): dop853's solution, except for chosen release azimuths."""
+import ctypes
 from typing import ClassVar
 
 from foucault_bench.integrators import get_integrator, register
@@ -371,8 +372,8 @@ class Picky(AdaptiveIntegrator):
         azimuth = problem.params.release_azimuth_deg
         if azimuth == DIVERGES_AT_DEG:
             return Solution.failure(problem.t_out, "left the sphere", status="diverged")
-        while azimuth == HANGS_AT_DEG:  # holds the GIL: only ending the process stops it
-            pass
+        while azimuth == HANGS_AT_DEG:  # a C sleep that holds the GIL (ctypes.PyDLL): only ending the process stops it; no CPU used
+            ctypes.PyDLL(None).sleep(3600)
         return get_integrator("dop853").solve(problem, tol=tol, monitor=monitor)
 '''
 

@@ -1,6 +1,6 @@
 """Nyström's fourth-order method for accelerations that depend on the velocity (``integrators.methods.nystrom4``):
-its declared stability limit is the one its coefficients give. Its observed order on every model is measured by
-the conformance test of every built-in integrator (tests/test_selftest.py)."""
+its declared stability limit is the one its coefficients give. Its observed order is measured by the conformance
+test of every built-in integrator (tests/test_selftest.py, on the models of ``ORDER_MODELS`` there)."""
 
 from __future__ import annotations
 

@@ -6,9 +6,10 @@ from __future__ import annotations
 import pytest
 
 from foucault_bench.bench.cli import main
-from foucault_bench.bench.gate.conformance import run_checks
+from foucault_bench.bench.gate.conformance import check_order, run_checks
 from foucault_bench.models import MODELS
 from foucault_bench.integrators import REGISTRY, built_in_names, get_integrator, unregister
+from model_sets import LEAVES_AND_LINEAR
 
 MUTANT_PLUGIN = "check_mutants"
 
@@ -31,18 +32,55 @@ def run_cli(argv: list[str], capsys) -> tuple[int, str, str]:
     return status, captured.out, captured.err
 
 
+ORDER_MODELS = LEAVES_AND_LINEAR
+"""The models each built-in integrator's order is checked on here: the linear model (its counters and stability
+checks compile it anyway) and the leaves of the refinement hierarchy, which carry every force term of their
+ancestors and between them every geometry and every kind of force (``test_the_order_models_cover_every_kind_of_model``).
+``foucault-bench selftest NAME`` checks every model; here the other models are checked on one integrator of each
+way a scheme reaches the force (``test_every_model_holds_the_order_of_each_way_of_reaching_the_force``), since an
+integrator × model product would compile every scheme once per model (the slowest part of the suite)."""
+
+FORCE_ACCESS_REPRESENTATIVES = ("rk4", "verlet", "boris", "implicit_midpoint")
+"""One built-in scheme per way a fixed-step scheme reaches a model's force: the acceleration of a Runge-Kutta
+stage (rk4), the kick and the velocity-dependent remainder of the Verlet sequences (verlet, the base of every
+composition), the free force itself (boris) and the acceleration inside a Newton iteration (implicit_midpoint).
+The other schemes, and the embedded pairs' main methods at fixed steps, reach it as one of these does."""
+
+
+def test_the_order_models_cover_every_kind_of_model() -> None:
+    """Between them the order models have every geometry and kind of force of ``MODELS``, and every other model
+    is an ancestor of one of them (its force terms are among theirs)."""
+    def kind(name: str) -> tuple:
+        return MODELS[name].geometry, MODELS[name].hamiltonian, MODELS[name].conserves_energy
+
+    assert {kind(name) for name in ORDER_MODELS} == {kind(name) for name in MODELS}
+    reached, frontier = set(ORDER_MODELS), list(ORDER_MODELS)
+    while frontier:
+        parents = set(MODELS[frontier.pop()].refines) - reached
+        reached |= parents
+        frontier.extend(parents)
+    assert reached == set(MODELS)
+
+
 @pytest.mark.parametrize("name", built_in_names())
 def test_every_built_in_integrator_conforms_to_what_it_declares(name: str) -> None:
-    checks = run_checks(get_integrator(name))
+    checks = run_checks(get_integrator(name), [MODELS[model] for model in ORDER_MODELS])
     failed = [f"{check.name}: {check.detail}" for check in checks if check.holds is False]
     assert not failed, failed
     applied = {check.name for check in checks if check.holds}
     assert {"counters", "divergence is a row", "failure is a row"} <= applied
     integrator = get_integrator(name)
     if not integrator.adaptive and integrator.order is not None:
-        assert {f"order on {model}" for model in MODELS} <= applied  # every model, each at its example parameters
+        assert {f"order on {model}" for model in ORDER_MODELS} <= applied  # each at its example parameters
     if integrator.stability_limit_kh is not None:
         assert {"stable below the limit", "diverges above the limit"} <= applied
+
+
+@pytest.mark.parametrize("model_name", [name for name in MODELS if name not in ORDER_MODELS])
+@pytest.mark.parametrize("name", FORCE_ACCESS_REPRESENTATIVES)
+def test_every_model_holds_the_order_of_each_way_of_reaching_the_force(name: str, model_name: str) -> None:
+    check = check_order(get_integrator(name), MODELS[model_name])
+    assert check.holds, check.detail
 
 
 def test_each_mutant_fails_its_declared_order(mutants) -> None:
