@@ -1,6 +1,7 @@
-"""Every adaptive integrator on the models of ``ADAPTIVE_MODELS`` (and on the real-pendulum models of
-``REFINED_MODELS`` at their example parameters): runs, accuracy against the real128 reference, counters, turning
-points, failures and settings.
+"""Every adaptive integrator on the linear model and the leaves of the refinement hierarchy at their example
+parameters, the other models of ``ADAPTIVE_MODELS`` and ``REFINED_MODELS`` on one integrator per way of reaching
+the right-hand side (``ideal_cases``, ``refined_cases``: each integrator × model pair is one more compilation):
+runs, accuracy against the real128 reference, counters, turning points, failures and settings.
 
 Scene: the Panthéon pendulum (L = 67 m, φ = 48.846°, A = 3 m) for 120 s (7 swings, 14 turning points), output
 every second. Errors are max over the grid of |Δy_i| / scale_i with scale = (A, A, kA, kA). Thresholds and the
@@ -129,8 +130,16 @@ def test_declares_its_facts(name: str) -> None:
         assert fact in documentation.lower(), fact
 
 
-@pytest.mark.parametrize("model_name", ADAPTIVE_MODELS)
-@pytest.mark.parametrize("name", ADAPTIVE)
+def ideal_cases() -> list:
+    """(integrator, model) for every adaptive integrator on the linear model, and the other ideal models on
+    ``FORCE_ACCESS_REPRESENTATIVES`` (every integrator meets their geometry and forces again in the leaves of
+    ``refined_cases``, which refine them)."""
+    return [pytest.param(name, model_name, id=f"{name}-{model_name}")
+            for model_name in ADAPTIVE_MODELS for name in ADAPTIVE
+            if model_name == "linear" or name in FORCE_ACCESS_REPRESENTATIVES]
+
+
+@pytest.mark.parametrize("name, model_name", ideal_cases())
 def test_runs_with_consistent_counters(name: str, model_name: str) -> None:
     solution = run(name, model_name, TIGHT)
     assert solution.status == "ok" and solution.message == "", solution.message
@@ -150,8 +159,7 @@ def test_runs_with_consistent_counters(name: str, model_name: str) -> None:
         assert 1 <= solution.njev < solution.nfev
 
 
-@pytest.mark.parametrize("model_name", ADAPTIVE_MODELS)
-@pytest.mark.parametrize("name", ADAPTIVE)
+@pytest.mark.parametrize("name, model_name", ideal_cases())
 def test_error_against_the_reference_shrinks_with_the_tolerance(name: str, model_name: str) -> None:
     loose = scaled_error(run(name, model_name, LOOSE), model_name)
     tight = scaled_error(run(name, model_name, TIGHT), model_name)
@@ -228,8 +236,7 @@ def test_the_taylor_step_watch_changes_nothing_without_quadratic_drag_and_contro
         assert errors[0] <= GLOBAL_OVER_LOCAL * TIGHT < errors[1], errors
 
 
-@pytest.mark.parametrize("model_name", ADAPTIVE_MODELS)
-@pytest.mark.parametrize("name", ADAPTIVE)
+@pytest.mark.parametrize("name, model_name", ideal_cases())
 def test_turning_points_match_the_reference(name: str, model_name: str) -> None:
     solution = run(name, model_name, TIGHT)
     expected = grid_turning_points(reference(model_name), model_name)
