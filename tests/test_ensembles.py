@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import math
 import sqlite3
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -487,3 +488,35 @@ def test_members_get_no_scene_page_or_recommendation_of_their_own(database: Path
     result_sections.recommendations(front, inputs)
     assert [call.args[1] for call in front.table.call_args_list] == ["recommendation_alone"]
     assert frame["ensemble"].notna().all() and len(set(frame["scene"])) > 1
+
+
+def test_resuming_a_half_stored_ensemble_runs_only_the_missing_members(database: Path, tmp_path: Path) -> None:
+    """A matrix run that ended with some members of an ensemble stored and others not (a power cut between two
+    batches): ``--resume`` runs the missing members only, leaves the stored rows as they were, and ends with
+    every member once, with the errors of the uninterrupted run (the fixed-step members are bitwise the
+    one-by-one solutions, so a batch of fewer members gives the same numbers)."""
+    from foucault_bench.bench.run.runner import run_matrix
+    from foucault_bench.bench.run.store import ResultsStore
+
+    path = tmp_path / "half.sqlite"
+    shutil.copyfile(database, path)
+    complete = {row["run_key"]: row for row in stored_rows(database)}
+    dropped = [key for key, row in complete.items()
+               if (row["integrator"], row["scene"]) in {("verlet", "fan.az30"), ("rk4", "fan.az0"), ("rk4", "fan.az90")}]
+    assert 0 < len(dropped) < len(complete)
+    with sqlite3.connect(path) as connection:
+        connection.executemany("DELETE FROM runs WHERE run_key = ?", [(key,) for key in dropped])
+        connection.execute("UPDATE matrix_runs SET status = 'running'")
+    connection.close()
+    kept_before = {row["run_key"]: row for row in stored_rows(path)}
+    with ResultsStore(path) as store:
+        run_matrix(parse_matrix(TINY, source="tiny"), store, jobs=1, resume=True, progress=False)
+        assert store.matrix_runs()["status"].tolist() == ["finished"]
+    rows = stored_rows(path)
+    assert sorted(row["run_key"] for row in rows) == sorted(complete)  # every member once
+    resumed = {row["run_key"]: row for row in rows}
+    assert all(resumed[key] == row for key, row in kept_before.items())  # the stored rows untouched
+    for key in dropped:
+        assert resumed[key]["status"] == complete[key]["status"] == "ok"
+        for column in (*VERDICT_COLUMNS, "nfev", "steps", "ensemble", "ensemble_member"):
+            assert same(resumed[key][column], complete[key][column]), (key, column)
