@@ -74,10 +74,14 @@ def build_report(inputs: ReportInputs, folder: Path, title: str = "foucault-benc
     if inputs.runs.empty:
         raise InputError("no runs to report on")
     builder = Builder(folder, progress, inputs.interactive, inputs.static, inputs.jobs, previous)
-    for section in SECTIONS:
-        builder.page(INDEX, "front page")
-        section(builder, inputs)
-    builder.draw_figures()
+    try:
+        for section in SECTIONS:
+            builder.page(INDEX, "front page")
+            section(builder, inputs)
+            builder.flush()
+        builder.draw_figures()
+    finally:
+        builder.close()
     return write_pages(folder, title, builder.pages)
 
 
@@ -100,7 +104,8 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
                  targets: tuple[float, ...] = DEFAULT_TARGETS, static: bool = False, jobs: int = 1) -> int:
     """``foucault-bench report``: the report of matrix run ``matrix_id`` (``None``: the latest) of database
     ``db`` written to folder ``out``; ``studies`` is ``stored``, ``recompute`` or ``skip``; ``static`` writes
-    every chart's PNG and SVG; ``jobs`` worker processes draw the figures. Exit status 0.
+    every chart's PNG and SVG; ``jobs`` worker processes compute the missing studies, draw the figures and write
+    the table files. Exit status 0.
 
     The report is built in a staging folder beside ``out`` and swapped in whole once complete
     (``bench.atomic.replacing_folder``; the command checks ``out`` first): a kill or a full disk leaves the
@@ -116,7 +121,8 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
         adequacy = store.adequacy(matrix_id)
         if not adequacy.empty:
             adequacy = adequacy.assign(scene=scene_labels(adequacy, runs))
-        study_tables = {} if studies == "skip" else _study_tables(store, db, recompute=studies == "recompute")
+        study_tables = {} if studies == "skip" else _study_tables(store, db, recompute=studies == "recompute",
+                                                                   jobs=jobs)
         revisions = len(group_revisions(store.matrix_runs(), source=str(db)))
         inputs = ReportInputs(runs=runs, studies=study_tables, adequacy=adequacy,
                               provenance={"database": str(db), **_provenance(store, matrix_id)},
@@ -131,17 +137,17 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
     return 0
 
 
-def _study_tables(store: ResultsStore, db: Path, recompute: bool) -> dict[str, pd.DataFrame]:
-    """``ensure_studies`` on ``store``, storing what it computes only when the database can be written (the
-    file and its folder, where SQLite keeps its journal); else a note names the tables computed for this report
-    only."""
+def _study_tables(store: ResultsStore, db: Path, recompute: bool, jobs: int) -> dict[str, pd.DataFrame]:
+    """``ensure_studies`` on ``store`` (``jobs`` worker processes), storing what it computes only when the database
+    can be written (the file and its folder, where SQLite keeps its journal); else a note names the tables
+    computed for this report only."""
     writable = os.access(db, os.W_OK) and os.access(Path(db).resolve().parent, os.W_OK)
     if not writable:
         missing = list(STUDIES) if recompute else [name for name in STUDIES if not _stored(store, name)]
         if missing:
             print(f"note: {db} is read-only: the study tables {', '.join(missing)} are computed for this report "
                   "and not stored", file=sys.stderr)
-    return ensure_studies(store, recompute=recompute, store_computed=writable)
+    return ensure_studies(store, recompute=recompute, store_computed=writable, jobs=jobs)
 
 
 def _stored(store: ResultsStore, name: str) -> bool:

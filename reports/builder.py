@@ -1,21 +1,25 @@
 """The report under construction: its pages of blocks, the figures still to draw, and the tables written beside.
 
 Sections (``reports.build.SECTIONS``) add blocks to a ``Builder``: ``page`` opens a page (``index.html``, one
-page per scene, the studies, all runs), ``add`` appends headings and paragraphs, ``table`` writes a table's files
-and shows it, ``figure`` and ``curves`` keep a place for a chart that ``draw_figures`` draws once every section
-has run: on ``jobs`` worker processes, in the page's order whatever order they finish in, with a progress bar
-naming each figure drawn. A figure whose inputs did not change since the previous build of the same folder is not
-drawn again (``reports.figure_cache``): its blocks and static files are taken from that build.
+page per scene, the studies, all runs), ``add`` appends headings and paragraphs, ``table`` shows a table and
+queues the writing of its files, ``figure`` and ``curves`` keep a place for a chart. The queued work (charts and
+table files) is done by worker processes while the sections go on: after each section ``flush`` hands what was
+queued to one worker (the sections use the other core), and ``draw_figures`` does the rest on ``jobs`` workers
+once every section has run. Blocks land in the page's order whatever order they finish in; a progress bar names
+each item done. A figure whose inputs did not change since the previous build of the same folder is not drawn
+again (``reports.figure_cache``): its blocks and static files are taken from that build.
 """
 
 from __future__ import annotations
 
 import multiprocessing
 import multiprocessing.context
+import multiprocessing.pool
+import queue
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Iterator
+from typing import TYPE_CHECKING, Callable
 
 import pandas as pd
 from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS
@@ -23,7 +27,7 @@ from matplotlib.figure import Figure as MplFigure
 from tqdm import tqdm
 
 from foucault_bench.reports import chart_style, interactive, plotly_conversion, tables
-from foucault_bench.reports.document import Block, Figure, Page, Paragraph, Table, write_table_files
+from foucault_bench.reports.document import Block, Figure, Page, Paragraph, Table, display_frame, write_table_files
 from foucault_bench.reports.figure_cache import FigureCache, Unhashable, digest
 
 if TYPE_CHECKING:
@@ -93,11 +97,11 @@ def scene_page(scene: str) -> str:
 
 
 _PENDING: list[Callable[[], list[Block]]] = []
-"""The figures of the report being built, read by the worker processes of ``Builder.draw_figures`` (which
-inherit it by fork: nothing is pickled but the blocks they return)."""
+"""The work queued by the report being built (charts to draw, table files to write), read by position by the
+worker processes of ``Builder`` (which inherit it by fork: nothing is pickled but the blocks they return)."""
 
 
-def _draw_pending(position: int) -> tuple[int, list[Block]]:
+def _do_pending(position: int) -> tuple[int, list[Block]]:
     return position, _PENDING[position]()
 
 
@@ -109,10 +113,11 @@ def _fork_context() -> multiprocessing.context.BaseContext | None:
 
 @dataclass
 class _Pending:
-    """A place kept for the blocks ``draw()`` returns: its page, its index there, what it is (progress bar) and
-    the digest of its inputs (``figure_cache.digest``; ``None``: always drawn)."""
+    """Queued work: ``draw()`` returns the blocks for a place kept on ``page`` at index ``place`` (a chart), or
+    writes files and returns nothing (``page`` None: a table's files); ``what`` names it in the progress bar,
+    ``key`` is the digest of its inputs (``figure_cache.digest``; ``None``: always done)."""
 
-    page: Page
+    page: Page | None
     place: int
     what: str
     draw: Callable[[], list[Block]]
@@ -138,6 +143,12 @@ class Builder:
         self.pages: list[Page] = []
         self.current = self.page(INDEX, "front page")
         self.pending: list[_Pending] = []
+        self._queued = 0  # pending[:_queued] are handed to workers (or reused from the cache)
+        self._todo: list[_Pending] = []  # the tasks handed to workers, by their position in _PENDING
+        self._done: queue.Queue[tuple[int, list[Block]] | BaseException] = queue.Queue()
+        self._pools: list[multiprocessing.pool.Pool] = []
+        self._background: multiprocessing.pool.Pool | None = None  # the one-worker pool of the last flush
+        self._unfinished = 0  # tasks handed to a pool and not yet collected by the background pool
 
     def page(self, file: str, title: str) -> Page:
         """Make page ``file`` (created with ``title`` on first use) the one blocks are added to; return it."""
@@ -183,52 +194,126 @@ class Builder:
 
     def table(self, frame: pd.DataFrame, name: str, title: str, notes: dict[str, str] | None = None,
               collapsible: bool = False, details: str | None = None) -> None:
-        """Write ``frame``'s files under tables/ and show it (folded when ``collapsible``; ``details``: a text
-        column shown as a folded row under each row instead of a cell)."""
-        shown = write_table_files(frame, self.folder, f"{TABLES}/{name}", title, tables.COLUMN_FORMATS)
+        """Show ``frame`` (folded when ``collapsible``; ``details``: a text column shown as a folded row under
+        each row instead of a cell) and queue the writing of its files under tables/ (``table_files``)."""
+        shown = display_frame(frame, tables.COLUMN_FORMATS)
+        self.table_files(frame, name, title, shown)
         self.add(Table(title, shown, f"{TABLES}/{name}", tables.notes_for(frame, notes), collapsible, details))
 
-    def draw_figures(self) -> None:
-        """Draw the pending figures not in the cache, on ``jobs`` worker processes when there are several, with a
-        bar that knows the total (and so shows an ETA) and names the figure last drawn; blocks keep their
-        order. Writes the cache of this build (``figure_cache``)."""
-        todo = []
-        for task in self.pending:
+    def table_files(self, frame: pd.DataFrame, name: str, title: str, shown: pd.DataFrame | None = None) -> None:
+        """Queue the writing of ``frame``'s files ``tables/<name>.csv``, ``.md``, ``.tex``, ``.html``
+        (``document.write_table_files``; ``shown``: its formatted cells when already made)."""
+        self.pending.append(_Pending(None, 0, f"{TABLES}/{name}", partial(
+            _write_files, frame, self.folder, f"{TABLES}/{name}", title, shown), None))
+
+    def flush(self) -> None:
+        """Hand the work queued since the last call to one worker process, if the previous handful is done (the
+        sections go on in this process, on the other core); with one job, or without the fork start method,
+        nothing (``draw_figures`` does it all)."""
+        context = _fork_context()
+        if self.jobs < 2 or context is None or self._unfinished:
+            return
+        tasks = self._take_queued()
+        if not tasks:
+            return
+        if self._background is not None:
+            self._background.close()
+        self._background = context.Pool(1)
+        self._pools.append(self._background)
+        self._submit(self._background, tasks, background=True)
+
+    def _take_queued(self) -> list[_Pending]:
+        """The queued tasks not yet handed out, those found in the figure cache left out (their blocks set);
+        longest first; each appended to ``_PENDING`` (for the workers forked after this)."""
+        tasks = []
+        for task in self.pending[self._queued:]:
             reused = self.cache.reuse(task.key) if task.key is not None else None
             if reused is None:
-                todo.append(task)
+                tasks.append(task)
             else:
                 task.blocks = reused
-        bar = tqdm(total=len(todo), desc=f"report figures ({len(self.pending) - len(todo)} unchanged)",
-                   unit="figure", disable=not self.progress, leave=False)
-        context = _fork_context()
-        jobs = min(self.jobs, len(todo))
-        order = sorted(todo, key=lambda task: not task.long)
-        _PENDING[:] = [task.draw for task in order]
-        try:
-            if jobs > 1 and context is not None:
-                with context.Pool(jobs) as pool:
-                    self._collect(order, pool.imap_unordered(_draw_pending, range(len(order))), bar)
-            else:
-                self._collect(order, map(_draw_pending, range(len(order))), bar)
-        finally:
-            _PENDING.clear()
-            bar.close()
-        for task in sorted(self.pending, key=lambda task: -task.place):
-            task.page.blocks[task.place:task.place + 1] = task.blocks
-        self.cache.write({task.key: task.blocks for task in self.pending if task.key is not None},
-                         drawn=[task.what for task in todo], reused=[task.what for task in self.pending
-                                                                     if task not in todo])
-        self.pending = []
+        self._queued = len(self.pending)
+        tasks.sort(key=lambda task: not task.long)
+        assert len(_PENDING) == len(self._todo), "one report is built at a time"
+        _PENDING.extend(task.draw for task in tasks)
+        self._todo.extend(tasks)
+        return tasks
 
-    @staticmethod
-    def _collect(order: list[_Pending], results: Iterator[tuple[int, list[Block]]], bar: tqdm) -> None:
-        """Store each task's blocks (``results``: position in ``order``, blocks, in any order), counted on
-        ``bar``."""
-        for position, blocks in results:
-            order[position].blocks = blocks
-            bar.set_postfix_str(f"drew {order[position].what}", refresh=False)
-            bar.update()
+    def _submit(self, pool: multiprocessing.pool.Pool, tasks: list[_Pending], background: bool = False) -> None:
+        """Run ``tasks`` (the last ``len(tasks)`` of ``_PENDING``) on ``pool``; results reach ``_done``."""
+        first = len(_PENDING) - len(tasks)
+
+        def finished(result: tuple[int, list[Block]]) -> None:
+            if background:
+                self._unfinished -= 1
+            self._done.put(result)
+
+        if background:
+            self._unfinished += len(tasks)
+        for position in range(first, len(_PENDING)):
+            pool.apply_async(_do_pending, (position,), callback=finished, error_callback=self._done.put)
+
+    def draw_figures(self) -> None:
+        """Do the queued work not yet handed out (charts not in the cache, table files) on ``jobs`` worker
+        processes when there are several, and wait for all of it, with a bar that knows the total (and so shows
+        an ETA) and names the item last done; blocks keep their order. Writes the cache of this build
+        (``figure_cache``)."""
+        try:
+            self._finish()
+        finally:
+            self.close()
+        charts = [task for task in self.pending if task.page is not None]
+        for task in sorted(charts, key=lambda task: -task.place):
+            if task.page is not None:
+                task.page.blocks[task.place:task.place + 1] = task.blocks
+        drawn = {id(task) for task in self._todo}
+        self.cache.write({task.key: task.blocks for task in charts if task.key is not None},
+                         drawn=[task.what for task in charts if id(task) in drawn],
+                         reused=[task.what for task in charts if id(task) not in drawn])
+        self.pending, self._todo, self._queued = [], [], 0
+
+    def close(self) -> None:
+        """Stop the worker processes and forget the queued work (after ``draw_figures``, or when a section
+        failed)."""
+        for pool in self._pools:
+            pool.terminate()
+        self._pools, self._background = [], None
+        _PENDING.clear()
+
+    def _finish(self) -> None:
+        tasks = self._take_queued()
+        charts = sum(task.page is not None for task in self.pending)
+        reused = charts - sum(task.page is not None for task in self._todo)
+        bar = tqdm(total=len(self._todo), desc=f"report figures and tables ({reused} figures unchanged)",
+                   unit="item", disable=not self.progress, leave=False)
+        context = _fork_context()
+        jobs = min(self.jobs, len(tasks))
+        if jobs > 1 and context is not None:
+            pool = context.Pool(jobs)
+            self._pools.append(pool)
+            self._submit(pool, tasks)
+        elif tasks:
+            first = len(_PENDING) - len(tasks)
+            for position in range(first, len(_PENDING)):
+                self._done.put(_do_pending(position))
+        try:
+            for _ in range(len(self._todo)):
+                result = self._done.get()
+                if isinstance(result, BaseException):
+                    raise result
+                position, blocks = result
+                self._todo[position].blocks = blocks
+                bar.set_postfix_str(f"done {self._todo[position].what}", refresh=False)
+                bar.update()
+        finally:
+            bar.close()
+
+
+def _write_files(frame: pd.DataFrame, folder: Path, stem: str, caption: str,
+                 shown: pd.DataFrame | None) -> list[Block]:
+    """A queued table's files (``document.write_table_files``); no blocks."""
+    write_table_files(frame, folder, stem, caption, tables.COLUMN_FORMATS, shown=shown)
+    return []
 
 
 def _render_figure(block: Figure, stem: Path, draw: Callable[[Path], Path],

@@ -20,6 +20,8 @@ the backend an interactive session uses; saving renders with Agg.
 
 from __future__ import annotations
 
+from collections import Counter
+
 import colorsys
 import math
 import re
@@ -217,7 +219,7 @@ class Sweep:
     @property
     def label(self) -> str:
         """The integrator with its counts of diverged and failed runs."""
-        statuses = pd.concat([self.diverged["status"], self.failed["status"]]).value_counts(sort=False)
+        statuses = Counter([*self.diverged["status"], *self.failed["status"]])  # in order of first appearance
         counts = [f"{count} {status}" for status, count in statuses.items()]
         return self.integrator + (f" ({', '.join(counts)})" if counts else "")
 
@@ -232,6 +234,11 @@ def sweeps(frame: pd.DataFrame, x_column: str, y_column: str) -> list[Sweep]:
     plottable = np.isfinite(x) & (x > 0) & np.isfinite(y) & (y > 0)
     along = -frame["kh"].fillna(frame["tol"]).to_numpy(dtype=float)  # coarse to fine
     names, tolerance_sweep = frame["integrator"].to_numpy(object), frame["tol"].notna().to_numpy(bool)
+    none = frame.iloc[:0]
+
+    def rows(selected: np.ndarray) -> pd.DataFrame:
+        return frame.iloc[selected] if selected.size else none  # most selections are empty: no copy for them
+
     found = []
     for integrator, family in ordered_integrators(frame):
         mine = names == integrator
@@ -239,9 +246,9 @@ def sweeps(frame: pd.DataFrame, x_column: str, y_column: str) -> list[Sweep]:
         drawn = drawn[np.argsort(along[drawn], kind="stable")]
         found.append(Sweep(integrator, family, bool(tolerance_sweep[mine].any()),
                            frame.iloc[drawn].assign(**{y_column: y[drawn]}),
-                           frame.iloc[np.flatnonzero(mine & ok & ~plottable)],
-                           frame.iloc[np.flatnonzero(mine & diverged)],
-                           frame.iloc[np.flatnonzero(mine & ~ok & ~diverged)]))
+                           rows(np.flatnonzero(mine & ok & ~plottable)),
+                           rows(np.flatnonzero(mine & diverged)),
+                           rows(np.flatnonzero(mine & ~ok & ~diverged))))
     return found
 
 

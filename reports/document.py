@@ -123,13 +123,15 @@ def display_frame(frame: pd.DataFrame, formats: Mapping[str, str] = MappingProxy
 
 
 def write_table_files(frame: pd.DataFrame, folder: Path, stem: str, caption: str,
-                      formats: Mapping[str, str] = MappingProxyType({})) -> pd.DataFrame:
+                      formats: Mapping[str, str] = MappingProxyType({}), shown: pd.DataFrame | None = None
+                      ) -> pd.DataFrame:
     """Write ``frame`` as ``<stem>.csv`` (full precision), ``.md``, ``.tex`` and ``.html`` (formatted with
-    ``formats``, see ``display_frame``) under ``folder``; return the formatted frame."""
+    ``formats``, see ``display_frame``; ``shown``: that formatted frame when already made) under ``folder``;
+    return the formatted frame."""
     target = folder / stem
     target.parent.mkdir(parents=True, exist_ok=True)
     frame.to_csv(target.with_suffix(".csv"), index=False)
-    shown = display_frame(frame, formats)
+    shown = display_frame(frame, formats) if shown is None else shown
     target.with_suffix(".md").write_text(f"**{markdown_text(caption)}**\n\n{markdown_table(shown)}\n", encoding="utf-8")
     target.with_suffix(".tex").write_text(latex_table(shown, caption, numeric_columns(shown)), encoding="ascii")
     target.with_suffix(".html").write_text(

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import pandas as pd
 import plotly.io as pio
 from _plotly_utils.basevalidators import copy_to_readonly_numpy_array, is_homogeneous_array
 from _plotly_utils.utils import to_typed_array_spec
@@ -38,7 +39,17 @@ def scatter(**properties: Any) -> Trace:
 
 
 def data_array(values: Any) -> np.ndarray:
-    """A data array as plotly's validation makes it (a read-only numpy copy of a list, Series or array)."""
+    """A data array as plotly's validation makes it (a read-only numpy copy of a list, Series or array).
+
+    A numeric numpy array or pandas Series (numpy dtype) is copied here as ``copy_to_readonly_numpy_array``
+    copies it (a C-contiguous copy, read-only) without its conversion layer, which costs a report of the default
+    matrix seconds of its thousands of calls; anything else goes through it."""
+    if isinstance(values, pd.Series) and isinstance(values.dtype, np.dtype):
+        values = values.to_numpy()
+    if type(values) is np.ndarray and values.dtype.kind in "uif":
+        copied = np.ascontiguousarray(values.copy())
+        copied.flags.writeable = False
+        return copied
     return copy_to_readonly_numpy_array(values)
 
 
@@ -83,6 +94,8 @@ def _encoded(value: Any) -> Any:
         return {key: to_typed_array_spec(item) if is_homogeneous_array(item) else _encoded(item)
                 for key, item in value.items()}
     if isinstance(value, (list, tuple)):
+        if not any(isinstance(item, (dict, list, tuple)) for item in value):
+            return list(value)  # a list of values (customdata rows, symbols) holds nothing to encode
         return [_encoded(item) for item in value]
     return value
 

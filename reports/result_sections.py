@@ -19,7 +19,7 @@ from foucault_bench.integrators import REGISTRY, STATUS_OK
 from foucault_bench.integrators.base import COST_COMPILED, COST_PYTHON_DRIVEN
 from foucault_bench.reports import charts, interactive, study_charts, tables
 from foucault_bench.reports.builder import INDEX, TABLES, Builder, ReportInputs, file_stem, scene_page
-from foucault_bench.reports.document import Heading, Paragraph, literal, write_table_files
+from foucault_bench.reports.document import Heading, Paragraph, literal
 
 
 def _cost_words(runs: pd.DataFrame) -> str:
@@ -102,8 +102,7 @@ def decisions(builder: Builder, inputs: ReportInputs) -> None:
                                (families, "best_of_family", "Best run of each family per scene (reference error)")):
         builder.table(frame[frame["metric"] == "reference_error"] if not frame.empty else frame, stem, title,
                       collapsible=True)
-        write_table_files(frame, builder.folder, f"{TABLES}/{stem}_all_metrics", f"{title[:title.index(' (')]}, "
-                          "every error metric", tables.COLUMN_FORMATS)
+        builder.table_files(frame, f"{stem}_all_metrics", f"{title[:title.index(' (')]}, every error metric")
     builder.add(Paragraph(
         f"The same for every error metric (energy error and drift, precession-rate error, analytic gap): "
         f"`{TABLES}/pareto_fronts_all_metrics.csv` and `{TABLES}/best_of_family_all_metrics.csv` (also .md, .tex, "
@@ -279,7 +278,7 @@ def all_runs(builder: Builder, inputs: ReportInputs) -> None:
         "second table hold every column of foucault_bench.bench.schema."))
     builder.table(tables.compact_table(runs), "runs_compact", "All runs (main columns)", collapsible=True)
     full = tables.full_table(runs)
-    write_table_files(full, builder.folder, f"{TABLES}/runs_full", "All runs, every column", tables.COLUMN_FORMATS)
+    builder.table_files(full, "runs_full", "All runs, every column")
     builder.add(Paragraph(f"Every column: `{TABLES}/runs_full.csv`, `.md`, `.tex`, `.html`."))
 
 

@@ -78,3 +78,23 @@ def test_a_changed_row_redraws_exactly_the_charts_showing_that_run(fixture_datab
     log = _log(tmp_path)
     assert set(log["drawn"]) == showing
     assert len(log["drawn"]) + len(log["reused"]) == len(_log(rebuilt)["reused"])
+
+
+def test_one_process_and_worker_processes_write_the_same_report(fixture_database: Path, fixture_report: Path,
+                                                                tmp_path: Path) -> None:
+    """The fixture report is built with two jobs: its charts and table files are made by worker processes, some
+    while the sections are still being computed (``Builder.flush``). Built again with one job, everything drawn
+    and written in this process and nothing reused, every page, ``REPORT.md`` and table file is the same byte for
+    byte."""
+    folder = tmp_path / "one_process"
+    inputs = _inputs(fixture_database)
+    inputs.jobs = 1
+    build_report(inputs, folder, previous=tmp_path / "none")
+    assert _log(folder)["reused"] == [] and _log(folder)["drawn"]
+    expected = [*report_pages(fixture_report), fixture_report / "REPORT.md",
+                *sorted((fixture_report / "tables").iterdir())]
+    assert len(expected) > 20 and sorted(path.name for path in (folder / "tables").iterdir()) == sorted(
+        path.name for path in (fixture_report / "tables").iterdir())
+    for path in expected:
+        name = path.relative_to(fixture_report)
+        assert (folder / name).read_bytes() == path.read_bytes(), name

@@ -56,9 +56,12 @@ def sha256(path: Path) -> str:
 
 
 def error_lines(capsys) -> list[str]:
+    """The non-blank lines of stderr as a terminal shows them: a progress bar erased by carriage returns
+    (``leave=False``) leaves nothing, so each line is its text after its last carriage return."""
     err = capsys.readouterr().err
     assert "Traceback" not in err
-    return [line for line in err.splitlines() if line.strip()]
+    shown = [line.rsplit("\r", 1)[-1] for line in err.split("\n")]
+    return [line for line in shown if line.strip()]
 
 
 @pytest.fixture

@@ -203,6 +203,10 @@ def test_ensure_studies_computes_missing_tables_once_and_reads_them_back() -> No
     assert (again["study_stability"]["kh"] == -1.0).all()  # read back, not recomputed
     recomputed = ensure_studies(store, recompute=True, configs=small, progress=False)
     pd.testing.assert_frame_equal(recomputed["study_stability"], first["study_stability"])  # deterministic
+    in_workers = ensure_studies(None, configs=small, progress=False, jobs=2)  # side by side, in worker processes
+    assert list(in_workers) == list(STUDIES)
+    for name, table in first.items():
+        pd.testing.assert_frame_equal(in_workers[name], table)
 
 
 def test_a_stored_study_of_another_version_is_recomputed() -> None:

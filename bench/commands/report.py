@@ -33,7 +33,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="also write every chart as PNG and SVG under figures/ (for papers; REPORT.md then "
                              "shows them); without it the charts are interactive in index.html only")
     parser.add_argument("--jobs", type=int, default=None,
-                        help="worker processes drawing the figures (default: the number of CPUs)")
+                        help="worker processes computing the missing studies, drawing the figures and writing the table "
+                             "files (default: the number of CPUs)")
 
 
 def main(args: argparse.Namespace) -> int:

@@ -3,10 +3,12 @@ its function and default config; ``ensure_studies`` reads the stored tables and 
 
 from __future__ import annotations
 
+import multiprocessing
 from dataclasses import dataclass
-from typing import Callable, Protocol
+from typing import Callable, Iterator, Protocol
 
 import pandas as pd
+from tqdm import tqdm
 
 from foucault_bench.bench.studies.energy import LongTimeEnergyConfig, long_time_energy
 from foucault_bench.bench.studies.long_time_roundoff import RoundoffConfig, roundoff_growth
@@ -63,24 +65,47 @@ class TableStore(Protocol):
 
 
 def ensure_studies(store: TableStore | None, recompute: bool = False, configs: dict[str, object] | None = None,
-                   progress: bool = True, store_computed: bool = True) -> dict[str, pd.DataFrame]:
+                   progress: bool = True, store_computed: bool = True, jobs: int = 1) -> dict[str, pd.DataFrame]:
     """Every study's table: read from ``store`` (``read_table``) or, when missing, of another ``Study.version``
     or ``recompute``, computed with its config (``configs`` overrides the defaults by study name) and written
     back (``write_table``) unless ``store_computed`` is false (a read-only database). ``store`` may be None:
-    everything is computed and nothing is written."""
+    everything is computed and nothing is written. ``jobs`` > 1 computes the missing studies side by side in
+    that many worker processes (forked where the platform can; each study's table is the same either way: a
+    study is a deterministic computation of its config), with one progress bar over the studies."""
     configs = configs or {}
-    tables = {}
+    tables: dict[str, pd.DataFrame] = {}
     for name, study in STUDIES.items():
-        stored = None
         if store is not None and not recompute:
             try:
                 stored = store.read_table(name)
             except KeyError:
-                stored = None
-        if stored is None or stored.empty or stored_version(stored) != study.version:
-            stored = study.compute(configs.get(name, study.config), progress=progress)
-            stored[STUDY_VERSION_COLUMN] = study.version
-            if store is not None and store_computed:
-                store.write_table(name, stored)
-        tables[name] = stored
-    return tables
+                continue
+            if not stored.empty and stored_version(stored) == study.version:
+                tables[name] = stored
+    missing = [name for name in STUDIES if name not in tables]
+    for name, table in _computed(missing, configs, progress, jobs):
+        table[STUDY_VERSION_COLUMN] = STUDIES[name].version
+        if store is not None and store_computed:
+            store.write_table(name, table)
+        tables[name] = table
+    return {name: tables[name] for name in STUDIES}
+
+
+def _compute(name: str, config: object, progress: bool) -> tuple[str, pd.DataFrame]:
+    return name, STUDIES[name].compute(config, progress=progress)
+
+
+def _computed(names: list[str], configs: dict[str, object], progress: bool,
+              jobs: int) -> Iterator[tuple[str, pd.DataFrame]]:
+    """(name, table) of the studies ``names``, in this process (each with its own progress bar) or, with
+    ``jobs`` > 1 and several of them, in a pool of worker processes (one bar counting the studies done)."""
+    tasks = [(name, configs.get(name, STUDIES[name].config)) for name in names]
+    if jobs < 2 or len(tasks) < 2 or "fork" not in multiprocessing.get_all_start_methods():
+        for name, config in tasks:
+            yield _compute(name, config, progress)
+        return
+    with multiprocessing.get_context("fork").Pool(min(jobs, len(tasks))) as pool, \
+            tqdm(total=len(tasks), desc="studies", unit="study", disable=not progress, leave=False) as bar:
+        for name, table in pool.starmap(_compute, [(name, config, False) for name, config in tasks]):
+            bar.update()
+            yield name, table
