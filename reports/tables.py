@@ -22,7 +22,7 @@ how a column is printed (``reports.document.display_frame``).
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Iterator, Sequence
 
 import numpy as np
 import pandas as pd
@@ -139,38 +139,46 @@ def notes_for(frame: pd.DataFrame, overrides: dict[str, str] | None = None) -> d
     return {column: notes[column] for column in frame.columns if column in notes}
 
 
-def _status_counts(group: pd.DataFrame) -> dict[str, object]:
-    counts: dict[str, object] = {"runs": len(group)}
-    counts.update({status: int((group["status"] == status).sum()) for status in STATUSES})
-    problems = group.loc[group["status"] != STATUS_OK, "message"].dropna()
-    problems = problems[problems.astype(str) != ""]
-    counts["note"] = "" if problems.empty else str(problems.iloc[0])
+def _status_counts(statuses: Sequence[object], messages: Sequence[object]) -> dict[str, object]:
+    """The runs of a group (its rows' ``status`` and ``message``, in row order) counted by status, and the first
+    non-empty message of a run that is not ok as its note."""
+    counts: dict[str, object] = {"runs": len(statuses)}
+    counts.update({status: sum(1 for value in statuses if value == status) for status in STATUSES})
+    counts["note"] = next((str(message) for status, message in zip(statuses, messages, strict=True)
+                           if status != STATUS_OK and not pd.isna(message) and str(message) != ""), "")
     return counts
 
 
-def _groups(frame: pd.DataFrame):
-    return frame.groupby(["scene", "integrator"], sort=True)
+def _groups(frame: pd.DataFrame) -> Iterator[tuple[tuple[str, str], pd.DataFrame, dict[str, object]]]:
+    """Each (scene, integrator) group of ``frame``, sorted, with its ``_status_counts``."""
+    statuses, messages = frame["status"].to_numpy(object), frame["message"].to_numpy(object)
+    positions = frame.groupby(["scene", "integrator"], sort=True).indices
+    for key, rows in positions.items():
+        yield key, frame.iloc[rows], _status_counts(statuses[rows], messages[rows])
 
 
 def per_integrator(frame: pd.DataFrame, target: float = MATCHED_ACCURACY_TARGET) -> pd.DataFrame:
     """One row per (scene, integrator): the cheapest setting (``pareto.cost_column``) with reference_error ≤
     ``target``, its cost, or why none reached it; the run counts by status."""
     cost = cost_column(frame)
+    # the cheapest run meeting the target, per group: a group's rows of the whole frame's cheapest_meeting are its
+    # own cheapest_meeting (a filter and a stable sort of its rows), the first one its cheapest
+    cheapest = {(run.scene, run.integrator): run for run in cheapest_meeting(frame, "reference_error", target)
+                .drop_duplicates(["scene", "integrator"]).itertuples(index=False)}
     rows = []
-    for (scene, integrator), group in _groups(frame):
+    for (scene, integrator), group, counts in _groups(frame):
         ok = group[group["status"] == STATUS_OK]
-        met = cheapest_meeting(group, "reference_error", target)
+        best = cheapest.get((scene, integrator))
         row = {"scene": scene, "integrator": integrator, "family": group["family"].iloc[0]}
-        if not met.empty:
-            best = met.iloc[0]
-            at = ok[ok["reference_error"].abs() == best["error"]].iloc[0]
-            row.update(outcome="reached", setting=best["setting"], reference_error=best["error"],
-                       **{cost: best[cost]}, nfev=at["nfev"])
+        if best is not None:
+            at = ok[ok["reference_error"].abs() == best.error].iloc[0]
+            row.update(outcome="reached", setting=best.setting, reference_error=best.error,
+                       **{cost: getattr(best, cost)}, nfev=at["nfev"])
         else:
             outcome = "not reached" if not ok.empty else f"no ok run ({', '.join(sorted(set(group['status'])))})"
             row.update(outcome=outcome, setting="", reference_error=ok["reference_error"].abs().min(),
                        **{cost: np.nan}, nfev=np.nan)
-        row.update(_status_counts(group))
+        row.update(counts)
         rows.append(row)
     columns = ["scene", "integrator", "family", "outcome", "setting", "reference_error", cost, "nfev",
                "runs", "ok", "diverged", "failed", "timeout", "note"]
@@ -206,11 +214,11 @@ def families(frame: pd.DataFrame) -> pd.DataFrame:
     parts = []
     for metric in metrics:
         best = pareto.best_of_family(frame, metric)
+        found = {(row["scene"], row["family"]): row for row in reversed(best.to_dict("records"))}  # the first
         rows = []
         for (scene, family), group in frame.groupby(["scene", "family"], sort=True):
-            found = best[(best["scene"] == scene) & (best["family"] == family)]
-            if not found.empty:
-                rows.append({**found.iloc[0].to_dict(), "outcome": "best run"})
+            if (scene, family) in found:
+                rows.append({**found[(scene, family)], "outcome": "best run"})
             elif group["model"].map(ERROR_METRICS[metric].applies).astype(bool).any():
                 counts = group["status"].value_counts()
                 statuses = ", ".join(f"{counts[status]} {status}" for status in STATUSES if status in counts)
@@ -227,7 +235,7 @@ def convergence_orders(frame: pd.DataFrame) -> pd.DataFrame:
     against step size (``bench.verdicts.convergence.observed_order``; needs two or more distinct steps), with
     the number of points that fit used."""
     rows = []
-    for (scene, integrator), group in _groups(frame):
+    for (scene, integrator), group, counts in _groups(frame):
         registered = REGISTRY.get(integrator)
         fixed = group[group["tol"].isna() & (group["status"] == STATUS_OK)]
         usable = fixed[(fixed["reference_error"] > 0) & np.isfinite(fixed["reference_error"]) & (fixed["step_s"] > 0)]
@@ -240,7 +248,7 @@ def convergence_orders(frame: pd.DataFrame) -> pd.DataFrame:
             "scene": scene, "integrator": integrator, "family": group["family"].iloc[0],
             "declared_order": None if registered is None else registered.order,
             "kind": "adaptive" if adaptive else "fixed-step", "fitted_order": fitted,
-            "points": points, **_status_counts(group),
+            "points": points, **counts,
         })
     return pd.DataFrame(rows)
 

@@ -95,6 +95,10 @@ def _compute(name: str, config: object, progress: bool) -> tuple[str, pd.DataFra
     return name, STUDIES[name].compute(config, progress=progress)
 
 
+def _compute_quietly(task: tuple[str, object]) -> tuple[str, pd.DataFrame]:
+    return _compute(*task, progress=False)
+
+
 def _computed(names: list[str], configs: dict[str, object], progress: bool,
               jobs: int) -> Iterator[tuple[str, pd.DataFrame]]:
     """(name, table) of the studies ``names``, in this process (each with its own progress bar) or, with
@@ -106,6 +110,6 @@ def _computed(names: list[str], configs: dict[str, object], progress: bool,
         return
     with multiprocessing.get_context("fork").Pool(min(jobs, len(tasks))) as pool, \
             tqdm(total=len(tasks), desc="studies", unit="study", disable=not progress, leave=False) as bar:
-        for name, table in pool.starmap(_compute, [(name, config, False) for name, config in tasks]):
+        for name, table in pool.imap_unordered(_compute_quietly, tasks):  # as each study ends
             bar.update()
             yield name, table

@@ -121,14 +121,13 @@ def best_of_family(frame: pd.DataFrame, metric: str = "reference_error") -> pd.D
     scene's front points (``pareto_front``) the family holds."""
     cost = cost_column(frame)
     runs = usable_runs(frame, metric, cost)
-    front = pareto_front(frame, metric)
+    front_points = pareto_front(frame, metric).groupby(["scene", "family"]).size()
     rows = []
     for (scene, family), group in runs.groupby(["scene", "family"], sort=True):
         best = group.sort_values(["error", "cost"], kind="stable").iloc[0]
-        on_front = front[(front["scene"] == scene) & (front["family"] == family)]
         rows.append({"scene": scene, "metric": metric, "family": family, "integrator": best["integrator"],
                      "setting": setting_label(best["kh"], best["tol"]), "error": best["error"], cost: best["cost"],
-                     "front_points": len(on_front)})
+                     "front_points": int(front_points.get((scene, family), 0))})
     return pd.DataFrame(rows, columns=["scene", "metric", "family", "integrator", "setting", "error", cost,
                                        "front_points"])
 
