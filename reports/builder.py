@@ -288,17 +288,16 @@ class Builder:
                    unit="item", disable=not self.progress, leave=False)
         context = _fork_context()
         jobs = min(self.jobs, len(tasks))
+        here: list[int] = []  # positions done in this process, one at a time between the workers' results
         if jobs > 1 and context is not None:
             pool = context.Pool(jobs)
             self._pools.append(pool)
             self._submit(pool, tasks)
-        elif tasks:
-            first = len(_PENDING) - len(tasks)
-            for position in range(first, len(_PENDING)):
-                self._done.put(_do_pending(position))
+        else:
+            here = list(range(len(_PENDING) - len(tasks), len(_PENDING)))
         try:
             for _ in range(len(self._todo)):
-                result = self._done.get()
+                result = _do_pending(here.pop(0)) if here and self._done.empty() else self._done.get()
                 if isinstance(result, BaseException):
                     raise result
                 position, blocks = result
