@@ -80,21 +80,27 @@ def test_a_changed_row_redraws_exactly_the_charts_showing_that_run(fixture_datab
     assert len(log["drawn"]) + len(log["reused"]) == len(_log(rebuilt)["reused"])
 
 
-def test_one_process_and_worker_processes_write_the_same_report(fixture_database: Path, fixture_report: Path,
-                                                                tmp_path: Path) -> None:
-    """The fixture report is built with two jobs: its charts and table files are made by worker processes, some
-    while the sections are still being computed (``Builder.flush``). Built again with one job, everything drawn
-    and written in this process and nothing reused, every page, ``REPORT.md`` and table file is the same byte for
-    byte."""
-    folder = tmp_path / "one_process"
-    inputs = _inputs(fixture_database)
-    inputs.jobs = 1
-    build_report(inputs, folder, previous=tmp_path / "none")
-    assert _log(folder)["reused"] == [] and _log(folder)["drawn"]
-    expected = [*report_pages(fixture_report), fixture_report / "REPORT.md",
-                *sorted((fixture_report / "tables").iterdir())]
-    assert len(expected) > 20 and sorted(path.name for path in (folder / "tables").iterdir()) == sorted(
-        path.name for path in (fixture_report / "tables").iterdir())
-    for path in expected:
-        name = path.relative_to(fixture_report)
-        assert (folder / name).read_bytes() == path.read_bytes(), name
+def test_one_process_and_worker_processes_write_the_same_report(fixture_database: Path, tmp_path: Path) -> None:
+    """With two jobs a report's charts and table files are made by worker processes, some while the sections are
+    still being computed (``Builder.flush``); with one job everything is drawn and written in this process. On two
+    of the fixture's scenes (of different models, one with diverged runs), both builds, nothing reused, write every
+    page, ``REPORT.md`` and table file the same byte for byte."""
+    with ResultsStore(fixture_database, create=False) as store:
+        stored = store.frame()
+    chosen = ["lab_3m", "pantheon"]
+    runs = stored[stored["scene"].isin(chosen)]
+    assert runs["model"].nunique() == 2 and (runs["status"] == "diverged").any()
+    folders = {}
+    for jobs in (2, 1):
+        inputs = _inputs(fixture_database, runs)
+        inputs.adequacy = inputs.adequacy[inputs.adequacy["scene"].isin(chosen)]
+        inputs.jobs, inputs.static = jobs, False  # interactive charts only: the static files are drawn alike
+        folders[jobs] = tmp_path / f"jobs_{jobs}"
+        build_report(inputs, folders[jobs], previous=tmp_path / "none")
+        assert _log(folders[jobs])["reused"] == [] and _log(folders[jobs])["drawn"]
+    tables = sorted(path.relative_to(folders[2]) for path in (folders[2] / "tables").iterdir())
+    assert sorted(path.relative_to(folders[1]) for path in (folders[1] / "tables").iterdir()) == tables
+    expected = [*(page.relative_to(folders[2]) for page in report_pages(folders[2])), Path("REPORT.md"), *tables]
+    assert len(expected) > 20
+    for name in expected:
+        assert (folders[1] / name).read_bytes() == (folders[2] / name).read_bytes(), name
