@@ -148,7 +148,7 @@ class Builder:
         self._done: queue.Queue[tuple[int, list[Block]] | BaseException] = queue.Queue()
         self._pools: list[multiprocessing.pool.Pool] = []
         self._background: multiprocessing.pool.Pool | None = None  # the one-worker pool of the last flush
-        self._unfinished = 0  # tasks handed to a pool and not yet collected by the background pool
+        self._unfinished = 0  # tasks handed to the background pool and not yet finished (no flush until 0)
 
     def page(self, file: str, title: str) -> Page:
         """Make page ``file`` (created with ``title`` on first use) the one blocks are added to; return it."""

@@ -20,11 +20,10 @@ the backend an interactive session uses; saving renders with Agg.
 
 from __future__ import annotations
 
-from collections import Counter
-
 import colorsys
 import math
 import re
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence

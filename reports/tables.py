@@ -152,8 +152,9 @@ def _status_counts(statuses: Sequence[object], messages: Sequence[object]) -> di
 def _groups(frame: pd.DataFrame) -> Iterator[tuple[tuple[str, str], pd.DataFrame, dict[str, object]]]:
     """Each (scene, integrator) group of ``frame``, sorted, with its ``_status_counts``."""
     statuses, messages = frame["status"].to_numpy(object), frame["message"].to_numpy(object)
-    positions = frame.groupby(["scene", "integrator"], sort=True).indices
-    for key, rows in positions.items():
+    positions = frame.groupby(["scene", "integrator"]).indices
+    for key in sorted(positions):
+        rows = positions[key]
         yield key, frame.iloc[rows], _status_counts(statuses[rows], messages[rows])
 
 
