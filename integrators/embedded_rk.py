@@ -83,8 +83,9 @@ class EmbeddedRungeKutta(AdaptiveIntegrator):
                 raise TypeError(f"{cls.__name__}.steps_of = {twin.__name__}: " + "; ".join(problems))
 
     main_method_unmeasurable: ClassVar[str] = ""
-    """Why the order of the main method cannot be observed in double precision by the order sweep of
-    ``foucault-bench selftest`` (``bench.gate.conformance``), when it cannot: then ``fixed_step_method`` is None."""
+    """Why the order of the main method cannot be observed by the order sweep of ``foucault-bench selftest``
+    (``bench.gate.conformance``), when it cannot in double precision and its coefficients are not known to more
+    digits (``ButcherTableau.exact``, stepped in 34 digits instead): then ``fixed_step_method`` is None."""
 
     def fixed_step_method(self) -> Integrator | None:
         """The pair's main method (c, A, b, order of ``tableau``, without error weights or dense output) stepped

@@ -23,7 +23,10 @@ the weights bᵢ(θ) = Σₖ Pᵢₖ θ^(k+1) of y(t + θh) = y + h Σᵢ bᵢ(�
 which the weights are derived for the checks.
 
 Round-off: the coefficients are doubles, so a condition holds to a few units of round-off of the sum of the
-absolute values of its terms, not exactly; ``CONDITION_RTOL`` bounds the residual relative to that sum.
+absolute values of its terms, not exactly; ``CONDITION_RTOL`` bounds the residual relative to that sum. A tableau
+built from its published digits (``from_stage_data``) also keeps its main method's c, A and b as exact rationals
+(``ExactCoefficients``), checked to round to the doubles, so that its order can be measured in more than double
+precision (``bench.gate.multiprecision_order``).
 """
 
 from __future__ import annotations
@@ -119,6 +122,28 @@ def _vector(values, length: int, what: str) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class ExactCoefficients:
+    """The nodes c, coefficients A (full s × s rows) and weights b of a main method as exact rationals: the
+    published digits, not rounded to doubles, for stepping the method in more than double precision."""
+
+    c: tuple[Fraction, ...]
+    a: tuple[tuple[Fraction, ...], ...]
+    b: tuple[Fraction, ...]
+
+    def rounding_problems(self, c: tuple[float, ...], a: tuple[tuple[float, ...], ...],
+                          b: tuple[float, ...]) -> list[str]:
+        """Where these values, rounded to the nearest double, differ from the tableau's ``c``, ``a`` and ``b``
+        (one message per array; empty when every entry rounds to the double given)."""
+        problems = []
+        for what, exact_values, doubles in (("c", self.c, c), ("a", tuple(x for row in self.a for x in row),
+                                                                 tuple(x for row in a for x in row)), ("b", self.b, b)):
+            rounded = tuple(float(x) for x in exact_values)
+            if rounded != tuple(float(x) for x in doubles):
+                problems.append(f"exact coefficients: {what} does not round to the tableau's doubles")
+        return problems
+
+
+@dataclass(frozen=True)
 class ButcherTableau:
     """An explicit Runge-Kutta method, optionally an embedded pair with dense output (see the module docstring for
     the layout and the checks).
@@ -131,6 +156,8 @@ class ButcherTableau:
         error_weights: e (s + 1): the local error estimate is h Σᵢ eᵢ kᵢ; (b, 0) − e has order ``error_order``;
             ``None`` for a method without an error estimate (``is_embedded`` is then false).
         error_order: order of that embedded solution (``None`` exactly when ``error_weights`` is).
+        exact: the main method's c, A and b as exact rationals (``ExactCoefficients``), where the published
+            digits are known to more places than a double holds; ``None`` otherwise.
         secondary_error_weights, secondary_error_order: DOP853's second embedded solution (order 3) whose
             estimate enters its error norm (Hairer, Nørsett & Wanner I, §II.10); ``None`` otherwise. The order
             of the error estimate then follows (``error_estimator_order``).
@@ -157,6 +184,7 @@ class ButcherTableau:
     dense_a: tuple[tuple[float, ...], ...] = ()
     secondary_error_weights: tuple[float, ...] | None = None
     secondary_error_order: int | None = None
+    exact: ExactCoefficients | None = None
 
     def __post_init__(self) -> None:
         problems = self.problems()
@@ -295,6 +323,8 @@ class ButcherTableau:
             problems += self._condition_problems(what, stages_a, weights, order)
         if self.has_dense_output:
             problems += self._dense_problems(full_a)
+        if self.exact is not None:
+            problems += self.exact.rounding_problems(self.c, self.a, self.b)
         return problems
 
     @staticmethod
@@ -336,14 +366,19 @@ def from_stage_data(name: str, *, stages: int, nodes: dict[int, str], coupling: 
     exact text (``exact``; absent entries are 0): ``nodes`` {stage: c}; ``coupling`` {stage: {stage: a}} for
     stages 2…s and for the dense-output stages s + 2, …; stage s + 1 is f(t + h, y_new) (its row is b, not
     given); ``weights`` {stage: b}; ``error_weights`` {stage: b − b̂}; ``dense_weights`` {stage: coefficients of
-    θ, θ², …} of bᵢ(θ)."""
+    θ, θ², …} of bᵢ(θ). The main method's c, A and b are also kept exact (``ExactCoefficients``)."""
     total = max([stages + 1, *coupling])
     degree = max(len(row) for row in dense_weights.values())
 
     def vector(entries: dict[int, str], length: int) -> tuple[float, ...]:
         return tuple(exact(entries[i + 1]) if i + 1 in entries else 0.0 for i in range(length))
 
+    def rationals(entries: dict[int, str], length: int) -> tuple[Fraction, ...]:
+        return tuple(Fraction(entries.get(i + 1, "0")) for i in range(length))
+
     rows = {i: vector(coupling.get(i, {}), total) for i in range(1, total + 1)}
+    main = ExactCoefficients(c=rationals(nodes, stages), b=rationals(weights, stages),
+                             a=tuple(rationals(coupling.get(i, {}), stages) for i in range(1, stages + 1)))
     return ButcherTableau(
         name=name, order=order, error_order=error_order, dense_order=dense_order, reference=reference,
         c=vector(nodes, stages), a=tuple(rows[i][:stages] for i in range(1, stages + 1)), b=vector(weights, stages),
@@ -351,4 +386,5 @@ def from_stage_data(name: str, *, stages: int, nodes: dict[int, str], coupling: 
         dense_c=vector(nodes, total)[stages + 1:], dense_a=tuple(rows[i] for i in range(stages + 2, total + 1)),
         dense_weights=tuple(tuple(exact(x) for x in dense_weights.get(i, ())) + (0.0,) * (
             degree - len(dense_weights.get(i, ()))) for i in range(1, total + 1)),
+        exact=main,
     )

@@ -6,11 +6,13 @@ whether the suite will treat the method correctly. Every check returns a ``Check
 
 1. **order on MODEL**, for every model and every integrator with a declared order p that steps at fixed steps,
    or is an adaptive pair whose main method can (``Integrator.fixed_step_method``: the embedded Runge-Kutta pairs'
-   c, A and b at fixed steps, ``integrators.embedded_rk``; ``tsit5`` and ``vern9`` say why theirs cannot be
-   measured in double precision, ``main_method_unmeasurable``): the observed order of the final-position error
-   over the step sweep of ``bench.gate.order_sweep`` (``measure_order``: its docstring says how the sweep is
-   derived from the declared facts and the model's) lies within ``ORDER_TOLERANCE`` of p. Adaptive integrators
-   without a fixed-step formula are skipped: error against tolerance is no order.
+   c, A and b at fixed steps, ``integrators.embedded_rk``): the observed order of the final-position error over
+   the step sweep of ``bench.gate.order_sweep`` (``measure_order``: its docstring says how the sweep is derived
+   from the declared facts and the model's) lies within ``ORDER_TOLERANCE`` of p. A pair whose main method is
+   known exactly (``ButcherTableau.exact``: ``vern7``, ``vern9``) is stepped in 34-digit arithmetic instead
+   (``bench.gate.multiprecision_order``), where the next error terms die out above round-off; ``tsit5`` says
+   why its main method cannot be measured (``main_method_unmeasurable``). Adaptive integrators without a
+   fixed-step formula are skipped: error against tolerance is no order.
 2. **stable below the limit** and **diverges above the limit**, for every declared ``stability_limit_kh``:
    on the undamped oscillator ẍ = −k²x (the linear model with no rotation, where the limit is defined;
    Hairer, Nørsett & Wanner, Solving ODEs I, §IV.2) the energy error reached after ``STABILITY_STEPS`` steps
@@ -43,20 +45,20 @@ from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
+from foucault_bench.bench.gate.multiprecision_order import DIGITS, measure_exact_order
 from foucault_bench.bench.gate.order_sweep import measure_order, order_parameters
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK, Integrator, Problem
 from foucault_bench.models import MODELS, Model, PendulumParameters
 from foucault_bench.models.parameters import P_K2, P_LENGTH
 
-ORDER_TOLERANCE = 0.15
+ORDER_TOLERANCE = 0.1
 """|observed − declared order| allowed. The fit over the finest points still carries the next error term,
 relatively O(kh) smaller: measured on the built-in methods, every model, |observed − declared| ≤ 0.06 up to order 6
-(RK4 3.94); above, 0.14 (vern7's main method on the drag and drive models, 7.14), 0.07 (dop853's main method,
-7.937; composition10, 9.937-10.02), 0.03 (composition8); a wrong method is off by a whole order or more (the
-mutants of tests/check_mutants.py: 1.9 for 4, 1.0 for 2). Not 0.1: vern7 on the drag and drive models stays
-pre-asymptotic down to round-off (7.143; local slopes 7.32 … 7.08), the one measured case beyond 0.1 since the
-high-order fit leaves out round-off-tilted points (``order_sweep.HIGH_ORDER_AGREEMENT``; integrators/README.md
-"Why the order check allows ± 0.15 and not ± 0.1")."""
+(RK4 3.94); above, 0.07 (dop853's main method, 7.937; composition10, 9.937-10.02), 0.03 (composition8; vern7 and
+vern9 in 34 digits, 7.004-7.011 and 8.979-9.030); a wrong method is off by a whole order or more (the mutants of
+tests/check_mutants.py: 1.9 for 4, 1.0 for 2). vern7's main method on the drag and drive models, stepped in
+double, stays pre-asymptotic down to round-off (7.143): its check steps it in 34 digits
+(``bench.gate.multiprecision_order``; integrators/README.md "Verner's pairs (`vern7`, `vern9`)")."""
 
 STABILITY_MARGIN = 0.01
 STABILITY_STEPS = 20_000
@@ -128,21 +130,27 @@ BLOW_UP_PARAMS = PendulumParameters(length_m=1.0, latitude_deg=45.0, amplitude_m
 
 def check_order(integrator: Integrator, model: Model) -> Check:
     name = f"order on {model.name}"
+    tableau = getattr(integrator, "tableau", None)
+    exact = tableau if integrator.adaptive and getattr(tableau, "exact", None) is not None else None
     stepped = integrator.fixed_step_method() if integrator.adaptive else integrator
-    if stepped is None or integrator.order is None:
+    if integrator.order is None or (exact is None and stepped is None):
         unmeasurable = getattr(integrator, "main_method_unmeasurable", "")
         why = ("no order declared" if integrator.order is None
                else f"adaptive, main method not measurable here: {unmeasurable}" if unmeasurable
                else "adaptive, with no fixed-step formula: error against tolerance is no order")
         return Check(name, None, why)
     params = order_parameters(model)
-    measured = measure_order(stepped, model, params)
+    if exact is not None:
+        measured = measure_exact_order(exact, model, params)
+        how = f" of its main method in {DIGITS}-digit arithmetic"
+    else:
+        assert stepped is not None  # excluded above
+        measured = measure_order(stepped, model, params)
+        how = f" of its main method at fixed steps ({stepped.name})" if stepped is not integrator else ""
     holds = bool(abs(measured.order - integrator.order) <= ORDER_TOLERANCE)
     points = ", ".join(f"{error:.1e}" for error in measured.errors[np.isfinite(measured.errors)][-4:])
     example = "".join(f", {key} = {value!r}" for key, value in model.example_parameters.items())
-    detail = (f"observed order {measured.order:.2f} of the final-position error"
-              + (f" of its main method at fixed steps ({stepped.name})" if stepped is not integrator else "")
-              + f", declared {integrator.order}, "
+    detail = (f"observed order {measured.order:.2f} of the final-position error{how}, declared {integrator.order}, "
               f"allowed ±{ORDER_TOLERANCE}: {'held' if holds else 'NOT held'}; "
               f"{measured.errors.size} steps down to kh = {measured.step_sizes_s[-1] * params.pendulum_frequency_rad_s:.2g}"
               f"{example}, finest errors {points}" + (f"; {measured.note}" if measured.note else ""))

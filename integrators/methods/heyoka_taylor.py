@@ -225,6 +225,27 @@ def prepared_run(problem: Problem, precision: str, tol: float, monitor: bool, ma
     return run
 
 
+def rewind(run: PreparedRun) -> None:
+    """Puts the run's integrator back at t = 0 with the release state and the problem's parameters."""
+    run.integrator.time = run.fp_zero
+    run.state_view[:] = run.state0
+    run.pars_view[:] = run.pars
+
+
+def final_state_in_quad(problem: Problem) -> np.ndarray:
+    """The state (x, y, ẋ, ẏ) at ``problem.t_end_s`` from heyoka's Taylor method in quadruple precision at
+    ``REFERENCE_TOLERANCE``, kept in ``heyoka.real128`` (not rounded to doubles): the reference of the order
+    sweep in 34-digit arithmetic (``bench.gate.multiprecision_order``). The compiled integrator is the one of
+    the quadruple-precision reference runs (``heyoka_taylor_quad``); ``RuntimeError`` if the propagation stops
+    short of the end."""
+    run = prepared_run(problem, "quad", REFERENCE_TOLERANCE, False, None)
+    rewind(run)
+    outcome, *_ = run.integrator.propagate_until(_fp_type("quad")(problem.t_end_s), max_steps=run.budget)
+    if outcome != _outcomes().time_limit:
+        raise RuntimeError(f"the quadruple-precision run stopped early: heyoka outcome {outcome.name}")
+    return np.array(run.state_view[:4], copy=True)
+
+
 def taylor_solution(problem: Problem, states, steps: int, order: int, heyoka_tol: float, outcome, time_reached,
                     budget: int) -> Solution:
     """The ``Solution`` of one heyoka propagation (also one lane of a batch, ``integrators.batch_heyoka``): the
@@ -271,9 +292,7 @@ class HeyokaTaylor(AdaptiveIntegrator):
     def _solve(self, problem: Problem, *, step_s: float | None, tol: float | None, monitor: bool) -> Solution:
         run = prepared_run(problem, self.precision, cast(float, tol), monitor, self.max_steps)
         integrator = run.integrator
-        integrator.time = run.fp_zero
-        run.state_view[:] = run.state0
-        run.pars_view[:] = run.pars
+        rewind(run)
         if monitor:
             integrator.reset_cooldowns()
             integrator.nt_events[0].callback.rows.clear()

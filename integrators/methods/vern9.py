@@ -385,10 +385,5 @@ class Vern9(EmbeddedRungeKutta):
     """Verner's most efficient 9(8) pair with scipy's error norm, controller and initial step, compiled."""
 
     name: ClassVar[str] = "vern9"
-    main_method_unmeasurable: ClassVar[str] = (
-        "Verner minimised the leading error coefficient, so the next term dominates down to round-off: local "
-        "slopes of the final-position error on the linear model 10.4 at kh 0.88, 9.42 at 0.35, 9.23 at 0.24, "
-        "9.13 at 0.20 (error 2.9e-14), 9.0 only at 0.16 (3.8e-15); the order fit above round-off is 9.2-9.5"
-    )
     tableau: ClassVar[ButcherTableau] = TABLEAU
     reference: ClassVar[str] = TABLEAU.reference

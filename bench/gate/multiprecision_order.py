@@ -1,0 +1,121 @@
+"""The order sweep of ``foucault-bench selftest`` (``bench.gate.conformance``, check 1) for an embedded pair whose
+main method is known to more digits than a double holds (``ButcherTableau.exact``: ``vern7`` and ``vern9``): its
+c, A and b stepped in 34-digit arithmetic, against heyoka's Taylor method in quadruple precision.
+
+Why: Verner minimised the leading error coefficients of his pairs, so the next terms of the error expansion hold
+the local slopes of a sweep above the order down to double precision's round-off (integrators/README.md
+"Verner's pairs (`vern7`, `vern9`)"): in double, ``vern9``'s fits are 9.2-9.5 and ``vern7``'s on the drag and
+drive models 7.14. In 34 digits the round-off lies near 1e-31 and the sweep runs on to final-position errors of
+``FLOOR_ERROR``, where the slopes have settled (measured on every model: ``vern7`` 7.004-7.011, ``vern9``
+8.979-9.030).
+
+The sweep is that of ``bench.gate.order_sweep`` above order 6: the same parameters (``order_parameters``, with
+the sped-up rotation and the drag and drive models' ellipse), duration (``ORDER_PERIODS``) and first step
+(``UNDECLARED_LIMIT_START_KH``), kh divided by 10^(1/p) from one run to the next (a decade of error per point),
+and the same fit (``fit_order``: the finest points whose local slopes agree within ``HIGH_ORDER_AGREEMENT``). It
+stops below ``FLOOR_ERROR``, or where the error stops falling (a wrong method's floor), that point fitted too.
+
+The right-hand side is the model's one force source (``Model.acceleration``) over mpmath's ``sqrt``, ``sin`` and
+``cos``, the source numba and heyoka compile; the release state and the parameters are the problem's doubles,
+exact in 34 digits. The reference, ``final_state_in_quad`` (``integrators.methods.heyoka_taylor``), is heyoka's
+Taylor method in IEEE binary128 at tol 1e-33, kept in binary128: about 1e-30 of the amplitude, far below the
+floor. Cost: 1-3 s of CPU per model and pair (mpmath in pure Python), plus the reference's compilation where
+heyoka's disk cache does not hold it.
+"""
+
+from __future__ import annotations
+
+import math
+import types
+from fractions import Fraction
+
+import mpmath
+import numpy as np
+
+from foucault_bench.bench.gate.order_sweep import (
+    HIGH_ORDER_AGREEMENT,
+    MAX_RUN_STEPS,
+    ORDER_PERIODS,
+    UNDECLARED_LIMIT_START_KH,
+    OrderMeasurement,
+    order_parameters,
+)
+from foucault_bench.bench.verdicts.convergence import observed_order
+from foucault_bench.integrators import Problem
+from foucault_bench.integrators.methods.heyoka_taylor import final_state_in_quad
+from foucault_bench.integrators.tableau import ButcherTableau
+from foucault_bench.models import Model, PendulumParameters
+
+DIGITS = 34
+"""mpmath's working precision: binary128's 34 significant digits, the reference's."""
+FLOOR_ERROR = 1e-18
+"""The sweep's last error (final position, units of the amplitude): 1e-12 above the reference's error, and
+where the local slopes of ``vern7`` and ``vern9`` are within 0.03 of their orders on every model (near 1e-15
+they are still up to 0.05 off)."""
+MAX_POINTS = 40
+"""A sweep still above the floor after this many points (a method of much lower order than declared) ends."""
+
+
+def measure_exact_order(tableau: ButcherTableau, model: Model, params: PendulumParameters | None = None,
+                        periods: float = ORDER_PERIODS) -> OrderMeasurement:
+    """Observed order of the main method of ``tableau`` (its exact c, A and b) on ``model``, stepped in
+    ``DIGITS``-digit arithmetic at fixed steps (see the module docstring); ``ValueError`` for a tableau without
+    exact coefficients."""
+    if tableau.exact is None:
+        raise ValueError(f"tableau {tableau.name!r} has no exact coefficients to step in {DIGITS} digits")
+    params = order_parameters(model) if params is None else params
+    duration = periods * params.small_swing_period_s
+    k = params.pendulum_frequency_rad_s
+    problem = Problem(model, params, np.array([0.0, duration]))
+    ratio = 10.0 ** (1.0 / tableau.order)
+    steps: list[float] = []
+    errors: list[float] = []
+    note = ""
+    with mpmath.workdps(DIGITS):
+        reference = [mpmath.mpf(str(value)) for value in final_state_in_quad(problem)[:2]]
+        kh = UNDECLARED_LIMIT_START_KH
+        while len(errors) < MAX_POINTS:
+            n_steps = math.ceil(k * duration / kh)
+            if n_steps > MAX_RUN_STEPS:
+                note = f"stopped at {MAX_RUN_STEPS} steps per run"
+                break
+            x, y = final_position(tableau, problem, n_steps)
+            error = float(mpmath.hypot(x - reference[0], y - reference[1])) / params.amplitude_m
+            steps.append(duration / n_steps)
+            errors.append(error)
+            if error < FLOOR_ERROR or (len(errors) > 1 and error >= errors[-2]):
+                break
+            kh /= ratio
+    order = observed_order(steps, errors, agreement=HIGH_ORDER_AGREEMENT)
+    return OrderMeasurement(np.array(steps), np.array(errors), order, note)
+
+
+def final_position(tableau: ButcherTableau, problem: Problem, n_steps: int) -> tuple[mpmath.mpf, mpmath.mpf]:
+    """(x, y) after ``n_steps`` steps of the exact main method over the problem's span, in mpmath's current
+    precision."""
+    exact = tableau.exact
+    assert exact is not None  # measure_exact_order checked it
+    rows = [[(j, _mpf(a_ij)) for j, a_ij in enumerate(row) if a_ij] for row in exact.a]
+    weights = [(i, _mpf(b_i)) for i, b_i in enumerate(exact.b) if b_i]
+    math_namespace = types.SimpleNamespace(sqrt=mpmath.sqrt, sin=mpmath.sin, cos=mpmath.cos)
+    p = [mpmath.mpf(float(value)) for value in problem.parameter_vector]
+    model = problem.model
+
+    def rhs(state: list) -> list:
+        ax, ay = model.acceleration(math_namespace, state[0], state[1], state[2], state[3], p)
+        return [state[2], state[3], ax, ay]
+
+    h = mpmath.mpf(problem.t_end_s) / n_steps
+    state = [mpmath.mpf(float(value)) for value in problem.initial_state]
+    for _ in range(n_steps):
+        stages: list[list] = []
+        for row in rows:
+            stage_state = [state[q] + h * mpmath.fdot((a_ij, stages[j][q]) for j, a_ij in row) for q in range(4)]
+            stages.append(rhs(stage_state))
+        state = [state[q] + h * mpmath.fdot((b_i, stages[i][q]) for i, b_i in weights) for q in range(4)]
+    return state[0], state[1]
+
+
+def _mpf(value: Fraction) -> mpmath.mpf:
+    """A rational to the nearest number of mpmath's current precision."""
+    return mpmath.mpf(value.numerator) / value.denominator
