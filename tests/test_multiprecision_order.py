@@ -1,8 +1,8 @@
-"""The order check in 34 digits (``bench.gate.multiprecision_order``) of the pairs whose main methods are known
-exactly (``ButcherTableau.exact``): the exact coefficients are those the compiled code rounds, the 34-digit
-stepper steps the same method as the compiled fixed-step loop, a pair declaring the wrong order fails, and
-``vern7`` and ``vern9`` hold their orders within ``ORDER_TOLERANCE`` on the drag and drive models, where
-``vern7``'s main method in double stays at 7.14 (the other models: tests/test_selftest.py)."""
+"""The order check in 34 digits (``bench.gate.multiprecision_order``) of the adaptive pairs whose main methods are
+known exactly: the exact coefficients are those the compiled code rounds, the 34-digit stepper steps the same
+method as the compiled fixed-step loop, a pair declaring the wrong order fails, and ``vern7``, ``vern9`` and
+``fine_rkn5`` hold their orders within ``ORDER_TOLERANCE`` on ``damped_linear``, where ``vern7``'s main method
+in double stays at 7.14 (the other models of the selftest's order check: tests/test_selftest.py)."""
 
 from __future__ import annotations
 
@@ -14,10 +14,16 @@ import numpy as np
 import pytest
 
 from foucault_bench.bench.gate.conformance import ORDER_TOLERANCE, check_order
-from foucault_bench.bench.gate.multiprecision_order import DIGITS, final_position, measure_exact_order
+from foucault_bench.bench.gate.multiprecision_order import (
+    DIGITS,
+    FLOOR_ERROR,
+    exact_main_method,
+    final_position,
+    measure_exact_order,
+)
 from foucault_bench.bench.gate.order_sweep import ROUND_OFF_PER_EVALUATION, order_parameters
-from foucault_bench.integrators import Problem, get_integrator
-from foucault_bench.integrators.tableau import ButcherTableau, ExactCoefficients
+from foucault_bench.integrators import Problem, built_in_names, get_integrator
+from foucault_bench.integrators.tableau import ExactCoefficients
 from foucault_bench.models import MODELS
 
 EXACT_PAIRS = ("vern7", "vern9")
@@ -69,25 +75,36 @@ def test_the_34_digit_stepper_steps_the_compiled_main_method(name: str, model_na
     assert solution.steps == 20 and gap <= ROUND_OFF_PER_EVALUATION * solution.nfev, (gap, solution.nfev)
 
 
-@pytest.mark.parametrize("model_name", ["damped_linear", "driven_linear"])
-@pytest.mark.parametrize("name", EXACT_PAIRS)
-def test_the_pairs_hold_their_orders_in_34_digits_on_the_drag_and_drive_models(name: str, model_name: str) -> None:
+@pytest.mark.parametrize("name", EXACT_PAIRS + ("fine_rkn5",))
+def test_the_pairs_hold_their_orders_in_34_digits_on_the_drag_model(name: str) -> None:
     integrator = get_integrator(name)
-    measured = measure_exact_order(integrator.tableau, MODELS[model_name])
+    method = exact_main_method(integrator)
+    assert method is not None
+    measured = measure_exact_order(method, MODELS["damped_linear"])
     assert abs(measured.order - integrator.order) <= ORDER_TOLERANCE, measured
-    check = check_order(integrator, MODELS[model_name])
-    assert check.holds and "34-digit arithmetic" in check.detail, check.detail
+    assert measured.errors[-1] < FLOOR_ERROR and np.all(np.diff(measured.errors) < 0), measured
 
 
-def test_a_pair_that_understates_its_order_fails_the_check() -> None:
-    """vern9's tableau declared as order 8 is a valid tableau (its conditions up to order 8 hold), so only the
-    measurement can catch the declaration: observed ≈ 9."""
-    vern9 = type(get_integrator("vern9"))
-    understated: ButcherTableau = dataclasses.replace(vern9.tableau, order=8)
-    attributes: dict[str, object] = {"name": "vern9_declared_8", "order": 8, "tableau": understated}
-    mutant = type("Vern9DeclaredEight", (vern9,), attributes)()
+def test_only_the_pairs_known_exactly_are_stepped_in_34_digits() -> None:
+    exact = {name for name in built_in_names() if exact_main_method(get_integrator(name)) is not None}
+    assert exact == {"vern7", "vern9", "fine_rkn5"}
+
+
+@pytest.mark.parametrize(("name", "declared"), [("vern9", 8), ("fine_rkn5", 6)])
+def test_a_pair_declaring_another_order_fails_the_check(name: str, declared: int) -> None:
+    """vern9's tableau declared as order 8 is a valid tableau (its conditions up to order 8 hold), and Fine's pair
+    declared as order 6 a valid pair (it checks the simplest conditions only), so only the measurement can catch
+    the declaration: observed ≈ 9 and 5."""
+    cls = type(get_integrator(name))
+    if name == "vern9":
+        attributes: dict[str, object] = {"tableau": dataclasses.replace(cls.tableau, order=declared)}
+    else:
+        attributes = {"pair": dataclasses.replace(cls.pair, order=declared), "order": declared}
+    mutant = type(f"{cls.__name__}Declared{declared}", (cls,), {"name": f"{name}_declared_{declared}", **attributes})()
+    assert mutant.order == declared
     check = check_order(mutant, MODELS["linear"])
-    assert check.holds is False and re.match(r"observed order (8\.9|9\.0)\d", check.detail), check.detail
+    observed = {"vern9": r"(8\.9|9\.0)\d", "fine_rkn5": r"(4\.9|5\.0)\d"}[name]
+    assert check.holds is False and re.match(f"observed order {observed}", check.detail), check.detail
 
 
 def test_the_exact_coefficients_type_is_plain_data() -> None:

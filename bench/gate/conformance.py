@@ -9,7 +9,8 @@ whether the suite will treat the method correctly. Every check returns a ``Check
    c, A and b at fixed steps, ``integrators.embedded_rk``): the observed order of the final-position error over
    the step sweep of ``bench.gate.order_sweep`` (``measure_order``: its docstring says how the sweep is derived
    from the declared facts and the model's) lies within ``ORDER_TOLERANCE`` of p. A pair whose main method is
-   known exactly (``ButcherTableau.exact``: ``vern7``, ``vern9``) is stepped in 34-digit arithmetic instead
+   known exactly (``exact_main_method``: ``vern7`` and ``vern9``, whose tableaux keep their published digits, and
+   the RKN pair ``fine_rkn5``, in fractions) is stepped in 34-digit arithmetic instead
    (``bench.gate.multiprecision_order``), where the next error terms die out above round-off; ``tsit5`` says
    why its main method cannot be measured (``main_method_unmeasurable``). Adaptive integrators without a
    fixed-step formula are skipped: error against tolerance is no order.
@@ -45,7 +46,7 @@ from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
-from foucault_bench.bench.gate.multiprecision_order import DIGITS, measure_exact_order
+from foucault_bench.bench.gate.multiprecision_order import DIGITS, exact_main_method, measure_exact_order
 from foucault_bench.bench.gate.order_sweep import measure_order, order_parameters
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, STATUS_OK, Integrator, Problem
 from foucault_bench.models import MODELS, Model, PendulumParameters
@@ -130,8 +131,7 @@ BLOW_UP_PARAMS = PendulumParameters(length_m=1.0, latitude_deg=45.0, amplitude_m
 
 def check_order(integrator: Integrator, model: Model) -> Check:
     name = f"order on {model.name}"
-    tableau = getattr(integrator, "tableau", None)
-    exact = tableau if integrator.adaptive and getattr(tableau, "exact", None) is not None else None
+    exact = exact_main_method(integrator)
     stepped = integrator.fixed_step_method() if integrator.adaptive else integrator
     if integrator.order is None or (exact is None and stepped is None):
         unmeasurable = getattr(integrator, "main_method_unmeasurable", "")

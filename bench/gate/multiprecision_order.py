@@ -1,13 +1,16 @@
-"""The order sweep of ``foucault-bench selftest`` (``bench.gate.conformance``, check 1) for an embedded pair whose
-main method is known to more digits than a double holds (``ButcherTableau.exact``: ``vern7`` and ``vern9``): its
-c, A and b stepped in 34-digit arithmetic, against heyoka's Taylor method in quadruple precision.
+"""The order sweep of ``foucault-bench selftest`` (``bench.gate.conformance``, check 1) for an adaptive pair whose
+main method is known to more digits than a double holds (``exact_main_method``: the tableaux of ``vern7`` and
+``vern9``, kept with their published digits, ``ButcherTableau.exact``; the general Runge-Kutta-Nyström pair
+``fine_rkn5``, in fractions): the main method stepped at fixed steps in 34-digit arithmetic, against heyoka's
+Taylor method in quadruple precision.
 
 Why: Verner minimised the leading error coefficients of his pairs, so the next terms of the error expansion hold
 the local slopes of a sweep above the order down to double precision's round-off (integrators/README.md
 "Verner's pairs (`vern7`, `vern9`)"): in double, ``vern9``'s fits are 9.2-9.5 and ``vern7``'s on the drag and
-drive models 7.14. In 34 digits the round-off lies near 1e-31 and the sweep runs on to final-position errors of
-``FLOOR_ERROR``, where the slopes have settled (measured on every model: ``vern7`` 7.004-7.011, ``vern9``
-8.979-9.030).
+drive models 7.14; ``fine_rkn5``'s slopes approach 5 from above as slowly (5.13 at 2.7e-14). In 34 digits the
+round-off lies near 1e-31 and the sweep runs on to final-position errors of ``FLOOR_ERROR``, where the slopes
+have settled (measured on every model: ``vern7`` 7.004-7.011, ``vern9`` 8.979-9.030; ``fine_rkn5`` on the
+linear and damped models 5.010 and 5.007).
 
 The sweep is that of ``bench.gate.order_sweep`` above order 6: the same parameters (``order_parameters``, with
 the sped-up rotation and the drag and drive models' ellipse), duration (``ORDER_PERIODS``) and first step
@@ -19,8 +22,9 @@ The right-hand side is the model's one force source (``Model.acceleration``) ove
 ``cos``, the source numba and heyoka compile; the release state and the parameters are the problem's doubles,
 exact in 34 digits. The reference, ``final_state_in_quad`` (``integrators.methods.heyoka_taylor``), is heyoka's
 Taylor method in IEEE binary128 at tol 1e-33, kept in binary128: about 1e-30 of the amplitude, far below the
-floor. Cost: 1-3 s of CPU per model and pair (mpmath in pure Python), plus the reference's compilation where
-heyoka's disk cache does not hold it.
+floor. Cost: 1-3 s of CPU per model for Verner's pairs and 5-7 s for ``fine_rkn5`` (mpmath in pure Python; the
+order-5 sweep takes thousands of steps to reach the floor), plus the reference's compilation where heyoka's disk
+cache does not hold it.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from __future__ import annotations
 import math
 import types
 from fractions import Fraction
+from typing import Callable
 
 import mpmath
 import numpy as np
@@ -41,10 +46,14 @@ from foucault_bench.bench.gate.order_sweep import (
     order_parameters,
 )
 from foucault_bench.bench.verdicts.convergence import observed_order
-from foucault_bench.integrators import Problem
+from foucault_bench.integrators import Integrator, Problem
 from foucault_bench.integrators.methods.heyoka_taylor import final_state_in_quad
+from foucault_bench.integrators.rkn import NystromPair
 from foucault_bench.integrators.tableau import ButcherTableau
 from foucault_bench.models import Model, PendulumParameters
+
+ExactMethod = ButcherTableau | NystromPair
+"""A main method whose coefficients are known exactly: a tableau with ``exact`` values, or an RKN pair (fractions)."""
 
 DIGITS = 34
 """mpmath's working precision: binary128's 34 significant digits, the reference's."""
@@ -56,18 +65,30 @@ MAX_POINTS = 40
 """A sweep still above the floor after this many points (a method of much lower order than declared) ends."""
 
 
-def measure_exact_order(tableau: ButcherTableau, model: Model, params: PendulumParameters | None = None,
+def exact_main_method(integrator: Integrator) -> ExactMethod | None:
+    """The main method of an adaptive integrator whose coefficients are known exactly: an embedded pair's tableau
+    with ``exact`` values (``vern7``, ``vern9``) or a general RKN pair (``pair``: ``fine_rkn5``); None otherwise."""
+    if not integrator.adaptive or integrator.order is None:
+        return None
+    tableau = getattr(integrator, "tableau", None)
+    if isinstance(tableau, ButcherTableau) and tableau.exact is not None:
+        return tableau
+    pair = getattr(integrator, "pair", None)
+    return pair if isinstance(pair, NystromPair) else None
+
+
+def measure_exact_order(method: ExactMethod, model: Model, params: PendulumParameters | None = None,
                         periods: float = ORDER_PERIODS) -> OrderMeasurement:
-    """Observed order of the main method of ``tableau`` (its exact c, A and b) on ``model``, stepped in
-    ``DIGITS``-digit arithmetic at fixed steps (see the module docstring); ``ValueError`` for a tableau without
-    exact coefficients."""
-    if tableau.exact is None:
-        raise ValueError(f"tableau {tableau.name!r} has no exact coefficients to step in {DIGITS} digits")
+    """Observed order of the main method of ``method`` (a tableau's exact c, A and b, or an RKN pair) on
+    ``model``, stepped in ``DIGITS``-digit arithmetic at fixed steps (see the module docstring); ``ValueError``
+    for a tableau without exact coefficients."""
+    if isinstance(method, ButcherTableau) and method.exact is None:
+        raise ValueError(f"tableau {method.name!r} has no exact coefficients to step in {DIGITS} digits")
     params = order_parameters(model) if params is None else params
     duration = periods * params.small_swing_period_s
     k = params.pendulum_frequency_rad_s
     problem = Problem(model, params, np.array([0.0, duration]))
-    ratio = 10.0 ** (1.0 / tableau.order)
+    ratio = 10.0 ** (1.0 / method.order)
     steps: list[float] = []
     errors: list[float] = []
     note = ""
@@ -79,7 +100,7 @@ def measure_exact_order(tableau: ButcherTableau, model: Model, params: PendulumP
             if n_steps > MAX_RUN_STEPS:
                 note = f"stopped at {MAX_RUN_STEPS} steps per run"
                 break
-            x, y = final_position(tableau, problem, n_steps)
+            x, y = final_position(method, problem, n_steps)
             error = float(mpmath.hypot(x - reference[0], y - reference[1])) / params.amplitude_m
             steps.append(duration / n_steps)
             errors.append(error)
@@ -90,30 +111,60 @@ def measure_exact_order(tableau: ButcherTableau, model: Model, params: PendulumP
     return OrderMeasurement(np.array(steps), np.array(errors), order, note)
 
 
-def final_position(tableau: ButcherTableau, problem: Problem, n_steps: int) -> tuple[mpmath.mpf, mpmath.mpf]:
+def final_position(method: ExactMethod, problem: Problem, n_steps: int) -> tuple[mpmath.mpf, mpmath.mpf]:
     """(x, y) after ``n_steps`` steps of the exact main method over the problem's span, in mpmath's current
-    precision."""
-    exact = tableau.exact
-    assert exact is not None  # measure_exact_order checked it
-    rows = [[(j, _mpf(a_ij)) for j, a_ij in enumerate(row) if a_ij] for row in exact.a]
-    weights = [(i, _mpf(b_i)) for i, b_i in enumerate(exact.b) if b_i]
+    precision: a Runge-Kutta tableau's c, A and b (HNW I, §II.1) or a general Runge-Kutta-Nyström pair's c, ā, a,
+    b̄ and b (HNW I, §II.14; ``integrators.rkn``). Every model is autonomous (``Model.acceleration`` has no t)."""
     math_namespace = types.SimpleNamespace(sqrt=mpmath.sqrt, sin=mpmath.sin, cos=mpmath.cos)
     p = [mpmath.mpf(float(value)) for value in problem.parameter_vector]
     model = problem.model
 
-    def rhs(state: list) -> list:
-        ax, ay = model.acceleration(math_namespace, state[0], state[1], state[2], state[3], p)
-        return [state[2], state[3], ax, ay]
+    def acceleration(x, y, vx, vy) -> tuple:
+        return model.acceleration(math_namespace, x, y, vx, vy, p)
 
     h = mpmath.mpf(problem.t_end_s) / n_steps
     state = [mpmath.mpf(float(value)) for value in problem.initial_state]
+    if isinstance(method, NystromPair):
+        return _nystrom_steps(method, acceleration, state, h, n_steps)
+    exact = method.exact
+    assert exact is not None  # measure_exact_order checked it
+    rows = _sparse(exact.a)
+    weights = _sparse([exact.b])[0]
     for _ in range(n_steps):
-        stages: list[list] = []
+        stages: list[tuple] = []
         for row in rows:
-            stage_state = [state[q] + h * mpmath.fdot((a_ij, stages[j][q]) for j, a_ij in row) for q in range(4)]
-            stages.append(rhs(stage_state))
-        state = [state[q] + h * mpmath.fdot((b_i, stages[i][q]) for i, b_i in weights) for q in range(4)]
+            stage = [state[q] + h * _dot(row, stages, q) for q in range(4)]
+            stages.append((stage[2], stage[3], *acceleration(*stage)))
+        state = [state[q] + h * _dot(weights, stages, q) for q in range(4)]
     return state[0], state[1]
+
+
+def _nystrom_steps(pair: NystromPair, acceleration: Callable, state: list, h: mpmath.mpf,
+                   n_steps: int) -> tuple[mpmath.mpf, mpmath.mpf]:
+    """``n_steps`` general RKN steps from ``state``: (x, y) at the end."""
+    position_rows, velocity_rows = _sparse(pair.position), _sparse(pair.velocity)
+    position_weights, velocity_weights = _sparse([pair.position_weights, pair.velocity_weights])
+    nodes = [_mpf(c) for c in pair.c]
+    h2 = h * h
+    for _ in range(n_steps):
+        stages: list[tuple] = []
+        for c, position_row, velocity_row in zip(nodes, position_rows, velocity_rows, strict=True):
+            position = [state[q] + c * h * state[q + 2] + h2 * _dot(position_row, stages, q) for q in range(2)]
+            velocity = [state[q + 2] + h * _dot(velocity_row, stages, q) for q in range(2)]
+            stages.append(acceleration(*position, *velocity))
+        state = [*(state[q] + h * state[q + 2] + h2 * _dot(position_weights, stages, q) for q in range(2)),
+                 *(state[q + 2] + h * _dot(velocity_weights, stages, q) for q in range(2))]
+    return state[0], state[1]
+
+
+def _sparse(rows) -> list[list[tuple[int, mpmath.mpf]]]:
+    """Each row's non-zero entries as (column, value) in mpmath's current precision."""
+    return [[(j, _mpf(value)) for j, value in enumerate(row) if value] for row in rows]
+
+
+def _dot(row: list[tuple[int, mpmath.mpf]], stages: list[tuple], component: int) -> mpmath.mpf:
+    """Σⱼ rowⱼ · stagesⱼ[component] over the row's non-zero entries."""
+    return mpmath.fdot((value, stages[j][component]) for j, value in row)
 
 
 def _mpf(value: Fraction) -> mpmath.mpf:

@@ -6,7 +6,9 @@ f(r₁, ṙ₁) reused as the next step's first (6 evaluations per attempt), ord
 order 4 for position and velocity (Fine, "Low order practical Runge-Kutta-Nyström methods", Computing 38, 281
 (1987)). Coefficients: OrdinaryDiffEq.jl's ``FineRKN5`` tableau (lib/OrdinaryDiffEqRKN, ``FineRKN5Tableau``),
 which gives Fine's method as exact fractions; the row sums and the first weight conditions are checked when the
-pair is built and the orders measured by tests/test_rkn.py.
+pair is built, the local orders measured by tests/test_rkn.py, and the main method's order by ``selftest``,
+stepped in 34 digits at fixed steps (``bench.gate.multiprecision_order``: 5.007-5.010 on the linear and damped
+models, measured 2026-12-04).
 
 Tolerance mapping: rtol = tol and atol = tol × (R, R, kR, kR) (``integrators.adaptive``). The steps land on
 every output time (``integrators.rkn``); no turning points are streamed (the verdicts take them from the grid).
@@ -69,6 +71,9 @@ class FineRkn5(GridSteppingIntegrator):
     family: ClassVar[str] = "runge-kutta-nystrom"
     order: ClassVar[int | None] = PAIR.order
     reference: ClassVar[str] = "Fine, Computing 38, 281 (1987); Hairer, Nørsett & Wanner, Solving ODEs I, §II.14"
+    pair: ClassVar[NystromPair] = PAIR
+    """The coefficients, exact: ``foucault-bench selftest`` measures the main method's order from them in 34
+    digits (``bench.gate.multiprecision_order``)."""
 
     def compiled_driver(self, model: Model) -> Callable:
-        return compiled_driver(model, PAIR)
+        return compiled_driver(model, self.pair)
