@@ -165,3 +165,45 @@ def test_a_kill_from_outside_while_building_leaves_the_old_report(killed_in_the_
     assert len(list(out.parent.glob(".report.building-*"))) == 1  # the killed build's staging folder, ignored
     recover(out)  # what the next run does first: the killed build's staging folder goes
     assert folder_digest(out) == place["old"] and leftovers(out.parent) == []
+
+
+POOL_OWNER = """
+import multiprocessing, os, sys, time
+from foucault_bench.reports.builder import _worker_pool
+pool = _worker_pool(multiprocessing.get_context("fork"), 2)
+pool.apply_async(time.sleep, (600.0,))  # a worker busy with a long task, as one drawing a chart
+print(" ".join(str(process.pid) for process in pool._pool), flush=True)
+time.sleep(600.0)
+"""
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` exists and is not a zombie (an orphan's zombie waits for a reaper that a container's
+    first process may never be)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+    return state != "Z"
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads process states from /proc")
+def test_the_report_s_workers_end_when_the_report_is_killed() -> None:
+    """The report's fork workers end with it: a worker left drawing after a kill from outside would write into
+    the staging folder the next build has removed (test_a_kill_from_outside_while_building_leaves_the_old_report
+    once found such a folder recreated after ``recover``). Without ``die_with_parent`` the workers wait on their
+    task queue for ever, the busy one sleeps for 10 minutes; with it they end at once (within 30 s allowed)."""
+    import sys
+
+    owner = subprocess.Popen([sys.executable, "-c", POOL_OWNER], stdout=subprocess.PIPE, text=True)
+    try:
+        assert owner.stdout is not None
+        workers = [int(pid) for pid in owner.stdout.readline().split()]
+        assert len(workers) == 2 and all(_alive(pid) for pid in workers)
+    finally:
+        owner.kill()
+        owner.wait(timeout=60)
+    deadline = time.monotonic() + 30.0
+    while any(_alive(pid) for pid in workers) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not any(_alive(pid) for pid in workers), workers

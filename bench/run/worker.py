@@ -15,11 +15,10 @@ The parent (``WorkerProcess``) sees a worker that died (a segfault in native cod
 killer) as end-of-file, and ends a worker whose task is past its time limit with ``SIGKILL``, the only way to
 stop a compiled loop that holds the GIL. A worker never outlives its parent:
 
-* on Linux the kernel kills it when the thread that started it ends (``prctl(PR_SET_PDEATHSIG, SIGKILL)``,
-  prctl(2)); workers are started from one long-lived thread (``_SPAWNER``) so that this is the process's life;
-* everywhere, a watchdog thread ends it within ``PARENT_POLL_S`` once its parent pid changes (the watchdog
-  needs the GIL, so it is the fallback where prctl does not exist), and an idle worker ends at end-of-file on
-  stdin or after ``IDLE_EXIT_S`` without a task.
+* ``bench.parent_death.die_with_parent``: on Linux the kernel kills it when the thread that started it ends
+  (workers are started from one long-lived thread, ``_SPAWNER``, so that this is the process's life), and
+  everywhere a watchdog thread ends it once its parent pid changes;
+* an idle worker ends at end-of-file on stdin or after ``IDLE_EXIT_S`` without a task.
 
 Workers ignore SIGINT and SIGTERM: a Ctrl-C in a terminal reaches the whole process group, and a run
 interrupted that way must not be stored as a failed row; the parent ends its workers itself.
@@ -37,15 +36,14 @@ import select
 import signal
 import subprocess
 import sys
-import threading
 import time
 import traceback
 from typing import Any, Callable
 
-PARENT_POLL_S = 0.5
+from foucault_bench.bench.parent_death import die_with_parent
+
 IDLE_EXIT_S = 60.0
 CLOSE_GRACE_S = 5.0
-PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 STARTED = "started"
 """The kind of the notice a worker sends when it begins a task (see the module docstring)."""
 START_ALLOWANCE_S = 300.0
@@ -64,7 +62,7 @@ WORKER_MODULES = (
 loads the calibration loop then)."""
 
 _SPAWNER = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="foucault-bench-spawner")
-"""Starts every worker: its thread lives as long as the process, which is what PR_SET_PDEATHSIG watches."""
+"""Starts every worker: its thread lives as long as the process, which is what ``die_with_parent``'s prctl watches."""
 
 
 def write_message(descriptor: int, value: Any) -> None:
@@ -236,29 +234,9 @@ class WorkerProcess:
 # --- the worker side ------------------------------------------------------------------------------------------
 
 
-def _die_with_parent(parent_pid: int) -> None:
-    """Arrange for this process to end when its parent does (see the module docstring)."""
-    if sys.platform.startswith("linux"):
-        import ctypes
-
-        try:
-            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-        except (OSError, AttributeError):
-            pass
-
-    def watch() -> None:
-        while os.getppid() == parent_pid:
-            time.sleep(PARENT_POLL_S)
-        os._exit(1)
-
-    if os.getppid() != parent_pid:  # the parent died before prctl took effect
-        os._exit(1)
-    threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
-
-
 def main(parent_pid: int) -> None:
     """Serve tasks from stdin until end-of-file (see the module docstring)."""
-    _die_with_parent(parent_pid)
+    die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     from foucault_bench.bench.run.timing import limit_threads  # standard library only: before numpy

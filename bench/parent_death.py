@@ -1,0 +1,46 @@
+"""Worker processes that never outlive their parent: ``die_with_parent``, called first in a worker (the run's
+workers, ``bench.run.worker``; the report's and the studies' fork pools, as the pool initializer).
+
+A parent killed from outside (``SIGKILL``, the OOM killer) cannot stop its workers, and a worker left running
+goes on with its task: a report's worker would write a chart or a table into the staging folder that the next
+build has already removed, recreating it as a half-written leftover beside the report. So each worker ends
+itself:
+
+* on Linux the kernel kills it when the thread that started it ends (``prctl(PR_SET_PDEATHSIG, SIGKILL)``,
+  prctl(2)): whoever starts workers does it from a thread that lives as long as the process (the main thread,
+  or the run's ``_SPAWNER``);
+* everywhere, a watchdog thread ends it within ``PARENT_POLL_S`` once its parent pid changes (the watchdog needs
+  the GIL, so it is the fallback where prctl does not exist, or where the parent died before prctl took effect).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+import time
+
+PARENT_POLL_S = 0.5
+PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
+
+
+def die_with_parent(parent_pid: int) -> None:
+    """Arrange for this process to end when its parent, ``parent_pid``, does (see the module docstring); ends it
+    at once if that parent is already gone."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):
+            pass
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    if os.getppid() != parent_pid:  # the parent died before prctl took effect
+        os._exit(1)
+    threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
