@@ -23,11 +23,15 @@ EPS = float(np.finfo(np.float64).eps)
 CONFIG = RoundoffConfig(min_decade=3, max_decade=5, stride=100, releases=5)
 BROUWER_CONSTANT_BOUND = 4.0
 """|ΔQ|/Q ≤ 4 ε √n at every decade: a step rounds some ten operations by ≤ ε/2 each, a random walk of them has
-C ≈ √(10/12) ≈ 1 (measured 0.5-1.0 for Verlet and the compositions, 0.07-0.3 for the Gauss methods over
-10⁶ steps, bench/PERF.md "Round-off"); 4 leaves a factor 4 for the scatter of a median of 5 walks. The loops
-before compensated sums and the converged solve drifted 0.2-1 ε per step, 2·10⁴-10⁵ ε at 10⁵ steps: 50-250× the bound."""
+C ≈ √(10/12) ≈ 1 (measured 0.5-1.0 for Verlet, yoshida4 and composition6, 0.07-0.3 for the Gauss methods over
+10⁶ steps, bench/PERF.md "Round-off"); 4 leaves a factor 4 for the scatter of a median of 5 walks. The order-8
+and order-10 compositions round 15 and 35 Verlet sub-steps a step, and their walks are wider: measured 0.96-2.06
+(composition8) and 1.29-3.20 (composition10, 3.20 at 10⁴ steps, the closest to the bound) with this
+configuration. The loops before compensated sums and the converged solve drifted 0.2-1 ε per step, 2·10⁴-10⁵ ε
+at 10⁵ steps: 50-250× the bound."""
 EXPONENT_BOUND = 0.7
-"""Brouwer's ½ plus 0.2 for the fit of a median of 5 random walks over two decades (measured 0.31-0.52)."""
+"""Brouwer's ½ plus 0.2 for the fit of a median of 5 random walks over two decades (measured 0.31-0.52; composition8
+0.33, composition10 0.43)."""
 GAUSS_SCHEMES = ("implicit_midpoint", "gauss_legendre4")
 GAUSS_CONFIG = RoundoffConfig(integrators=GAUSS_SCHEMES, min_decade=4, max_decade=6, stride=100, releases=9)
 """The Gauss methods' energy (their Q) from 10⁴ to 10⁶ steps: the range over which a systematic error per step

@@ -35,9 +35,10 @@ from foucault_bench.integrators import FixedStepIntegrator, get_integrator
 from foucault_bench.integrators.fixed_step import build_kernel
 from foucault_bench.models import MODELS, PendulumParameters
 
-ROUNDOFF_INTEGRATORS = ("verlet", "yoshida4", "composition6", "implicit_midpoint", "gauss_legendre4")
-"""The schemes whose invariant form the study follows: the symmetric, symplectic ones (issue: Verlet, the
-compositions, the Gauss–Legendre methods)."""
+ROUNDOFF_INTEGRATORS = ("verlet", "yoshida4", "composition6", "composition8", "composition10", "implicit_midpoint",
+                        "gauss_legendre4")
+"""The schemes whose invariant form the study follows: the symmetric, symplectic ones (Verlet, its compositions of
+orders 4 to 10, the Gauss–Legendre methods)."""
 BROUWER_EXPONENT = 0.5
 NULL_SPACE_TOLERANCE = 1e-10
 """Singular values of X ↦ MᵀXM − X (on ``rotation_invariant_forms``) below this span the invariant forms:
