@@ -54,11 +54,14 @@ from foucault_bench.models.parameters import P_K2, P_LENGTH
 
 ORDER_TOLERANCE = 0.1
 """|observed − declared order| allowed. The fit over the finest points still carries the next error term,
-relatively O(kh) smaller: measured on the built-in methods, every model, |observed − declared| ≤ 0.06 up to order 6
-(RK4 3.94); above, 0.07 (dop853's main method, 7.937; composition10, 9.937-10.02), 0.03 (composition8; vern7 and
-vern9 in 34 digits, 7.004-7.011 and 8.979-9.030); a wrong method is off by a whole order or more (the mutants of
-tests/check_mutants.py: 1.9 for 4, 1.0 for 2). vern7's main method on the drag and drive models, stepped in
-double, stays pre-asymptotic down to round-off (7.143): its check steps it in 34 digits
+relatively O(kh) smaller. Measured with ``foucault-bench selftest`` on every built-in integrator and every model
+(2026-12-04), the largest |observed − declared| are: dopri5's main method 0.09 (5.06-5.09: like Tsitouras's,
+its slopes approach 5 from above down to the sweep's floor), rk4 0.07 (3.93-3.97), composition6, composition10,
+dop853's main method, heun3 and nystrom4 0.06, composition8 0.05, gbs4 0.04, vern9 0.03 and vern7 and fine_rkn5
+0.01 (the last three stepped in 34 digits), the rest ≤ 0.01; a wrong method is off by a whole order or more
+(the mutants of tests/check_mutants.py: 1.9 for 4, 1.0 for 2; tests/test_multiprecision_order.py: a pair
+declaring one order more or less). vern7's main method on the drag and drive models, stepped in double, stays
+pre-asymptotic down to round-off (7.143), which is why it is stepped in 34 digits
 (``bench.gate.multiprecision_order``; integrators/README.md "Verner's pairs (`vern7`, `vern9`)")."""
 
 STABILITY_MARGIN = 0.01
