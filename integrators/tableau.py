@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 
 import numpy as np
@@ -184,7 +184,9 @@ class ButcherTableau:
     dense_a: tuple[tuple[float, ...], ...] = ()
     secondary_error_weights: tuple[float, ...] | None = None
     secondary_error_order: int | None = None
-    exact: ExactCoefficients | None = None
+    exact: ExactCoefficients | None = field(default=None, compare=False, hash=False, repr=False)
+    """Not hashed nor compared: a tableau is a cache key of its compiled driver, looked up on every solve, and
+    hashing some 300 forty-digit fractions cost vern9 about 0.3 ms a solve."""
 
     def __post_init__(self) -> None:
         problems = self.problems()

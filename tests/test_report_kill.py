@@ -191,8 +191,8 @@ def _alive(pid: int) -> bool:
 def test_the_report_s_workers_end_when_the_report_is_killed() -> None:
     """The report's fork workers end with it: a worker left drawing after a kill from outside would write into
     the staging folder the next build has removed (test_a_kill_from_outside_while_building_leaves_the_old_report
-    once found such a folder recreated after ``recover``). Without ``die_with_parent`` the workers wait on their
-    task queue for ever, the busy one sleeps for 10 minutes; with it they end at once (within 30 s allowed)."""
+    once found such a folder recreated after ``recover``). Without ``die_with_parent`` the busy worker goes on with
+    its 10-minute task (the idle one ends when its task queue closes); with it both end at once (30 s allowed)."""
     import sys
 
     owner = subprocess.Popen([sys.executable, "-c", POOL_OWNER], stdout=subprocess.PIPE, text=True)

@@ -135,7 +135,7 @@ BLOW_UP_PARAMS = PendulumParameters(length_m=1.0, latitude_deg=45.0, amplitude_m
 def check_order(integrator: Integrator, model: Model) -> Check:
     name = f"order on {model.name}"
     exact = exact_main_method(integrator)
-    stepped = integrator.fixed_step_method() if integrator.adaptive else integrator
+    stepped = None if exact is not None else integrator.fixed_step_method() if integrator.adaptive else integrator
     if integrator.order is None or (exact is None and stepped is None):
         unmeasurable = getattr(integrator, "main_method_unmeasurable", "")
         why = ("no order declared" if integrator.order is None

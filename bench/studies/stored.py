@@ -44,7 +44,8 @@ STUDIES: dict[str, Study] = {
         Study("study_precession_latitude", precession_vs_latitude, PrecessionLatitudeConfig()),
         # version 2: kh is the step taken (kh_requested the configured one); no rk4
         Study("study_release_azimuth", precession_vs_release_azimuth, ReleaseAzimuthConfig(), version=2),
-        Study("study_long_time_roundoff", roundoff_growth, RoundoffConfig()),
+        # version 2: composition8 and composition10 too
+        Study("study_long_time_roundoff", roundoff_growth, RoundoffConfig(), version=2),
     )
 }
 
