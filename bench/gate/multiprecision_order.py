@@ -26,7 +26,7 @@ The right-hand side is the model's one force source (``Model.acceleration``) ove
 ``cos``, the source numba and heyoka compile; the release state and the parameters are the problem's doubles,
 exact in 34 digits. The reference, ``final_state_in_quad`` (``integrators.methods.heyoka_taylor``), is heyoka's
 Taylor method in IEEE binary128 at tol 1e-33, kept in binary128: about 1e-30 of the amplitude, far below the
-floor. Cost: 1-3 s of CPU per model for Verner's pairs and 5-7 s for ``fine_rkn5`` (mpmath in pure Python; the
+floor. Cost: 1-3 s of CPU per model for Verner's pairs and 5-10 s for ``fine_rkn5`` (mpmath in pure Python; the
 order-5 sweep takes thousands of steps to reach the floor), plus the reference's compilation where heyoka's disk
 cache does not hold it.
 """
