@@ -1,5 +1,6 @@
 """Worker processes that never outlive their parent: ``die_with_parent``, called first in a worker (the run's
-workers, ``bench.run.worker``; the report's and the studies' fork pools, as the pool initializer).
+workers, ``bench.run.worker``; the report's and the studies' fork pools, ``worker_pool``, as the pool
+initializer).
 
 A parent killed from outside (``SIGKILL``, the OOM killer) cannot stop its workers, and a worker left running
 goes on with its task: a report's worker would write a chart or a table into the staging folder that the next
@@ -15,6 +16,8 @@ itself:
 
 from __future__ import annotations
 
+import multiprocessing.context
+import multiprocessing.pool
 import os
 import signal
 import sys
@@ -44,3 +47,9 @@ def die_with_parent(parent_pid: int) -> None:
     if os.getppid() != parent_pid:  # the parent died before prctl took effect
         os._exit(1)
     threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
+
+
+def worker_pool(context: multiprocessing.context.BaseContext, jobs: int) -> multiprocessing.pool.Pool:
+    """``jobs`` worker processes of ``context`` that end with this process (``die_with_parent``); create it from a
+    thread that lives as long as the process (the main thread)."""
+    return context.Pool(jobs, initializer=die_with_parent, initargs=(os.getpid(),))

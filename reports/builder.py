@@ -15,7 +15,6 @@ from __future__ import annotations
 import multiprocessing
 import multiprocessing.context
 import multiprocessing.pool
-import os
 import queue
 from dataclasses import dataclass, field
 from functools import partial
@@ -27,7 +26,7 @@ from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS
 from matplotlib.figure import Figure as MplFigure
 from tqdm import tqdm
 
-from foucault_bench.bench.parent_death import die_with_parent
+from foucault_bench.bench.parent_death import worker_pool
 from foucault_bench.reports import chart_style, interactive, plotly_conversion, tables
 from foucault_bench.reports.document import Block, Figure, Page, Paragraph, Table, display_frame, write_table_files
 from foucault_bench.reports.figure_cache import FigureCache, Unhashable, digest
@@ -111,12 +110,6 @@ def _fork_context() -> multiprocessing.context.BaseContext | None:
     """The fork start method where the platform has it (worker processes inherit the figures to draw), else
     ``None`` (the figures are drawn in this process)."""
     return multiprocessing.get_context("fork") if "fork" in multiprocessing.get_all_start_methods() else None
-
-
-def _worker_pool(context: multiprocessing.context.BaseContext, jobs: int) -> multiprocessing.pool.Pool:
-    """``jobs`` forked workers that end with this process (``die_with_parent``): a build killed from outside leaves
-    none writing into its staging folder after the next build has removed it."""
-    return context.Pool(jobs, initializer=die_with_parent, initargs=(os.getpid(),))
 
 
 @dataclass
@@ -226,7 +219,7 @@ class Builder:
             return
         if self._background is not None:
             self._background.close()
-        self._background = _worker_pool(context, 1)
+        self._background = worker_pool(context, 1)
         self._pools.append(self._background)
         self._submit(self._background, tasks, background=True)
 
@@ -298,7 +291,7 @@ class Builder:
         jobs = min(self.jobs, len(tasks))
         here: list[int] = []  # positions done in this process, one at a time between the workers' results
         if jobs > 1 and context is not None:
-            pool = _worker_pool(context, jobs)
+            pool = worker_pool(context, jobs)
             self._pools.append(pool)
             self._submit(pool, tasks)
         else:

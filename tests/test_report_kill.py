@@ -169,8 +169,8 @@ def test_a_kill_from_outside_while_building_leaves_the_old_report(killed_in_the_
 
 POOL_OWNER = """
 import multiprocessing, os, sys, time
-from foucault_bench.reports.builder import _worker_pool
-pool = _worker_pool(multiprocessing.get_context("fork"), 2)
+from foucault_bench.bench.parent_death import worker_pool
+pool = worker_pool(multiprocessing.get_context("fork"), 2)
 pool.apply_async(time.sleep, (600.0,))  # a worker busy with a long task, as one drawing a chart
 print(" ".join(str(process.pid) for process in pool._pool), flush=True)
 time.sleep(600.0)

@@ -4,14 +4,13 @@ its function and default config; ``ensure_studies`` reads the stored tables and 
 from __future__ import annotations
 
 import multiprocessing
-import os
 from dataclasses import dataclass
 from typing import Callable, Iterator, Protocol
 
 import pandas as pd
 from tqdm import tqdm
 
-from foucault_bench.bench.parent_death import die_with_parent
+from foucault_bench.bench.parent_death import worker_pool
 from foucault_bench.bench.studies.energy import LongTimeEnergyConfig, long_time_energy
 from foucault_bench.bench.studies.long_time_roundoff import RoundoffConfig, roundoff_growth
 from foucault_bench.bench.studies.precession import (
@@ -111,8 +110,7 @@ def _computed(names: list[str], configs: dict[str, object], progress: bool,
         for name, config in tasks:
             yield _compute(name, config, progress)
         return
-    with multiprocessing.get_context("fork").Pool(min(jobs, len(tasks)), initializer=die_with_parent,
-                                                  initargs=(os.getpid(),)) as pool, \
+    with worker_pool(multiprocessing.get_context("fork"), min(jobs, len(tasks))) as pool, \
             tqdm(total=len(tasks), desc="studies", unit="study", disable=not progress, leave=False) as bar:
         for name, table in pool.imap_unordered(_compute_quietly, tasks):  # as each study ends
             bar.update()
