@@ -363,3 +363,58 @@ def test_a_new_field_is_documented_by_its_rule_alone() -> None:
     keys = {key.name: key.meaning for key in parameter_keys(extended)}
     assert keys["wind_accel_m_s2"] == meaning
     assert keys["length_m"].startswith("string length L (m)")
+
+
+ADVISE_TRANSCRIPT = re.compile(r"```\n\$ foucault-bench advise --scene (\S+) --target (\S+)\n(.*?)```", re.S)
+ADVISE_RUN = re.compile(r"^(?:recommended:|next:|) *(?P<integrator>\S+) (?P<setting>(?:tol|kh)=\S+): (?P<metric>\w+) "
+                        r"(?P<error>\S+), (?P<kind>CPU|wall) time (?P<cost_ms>\S+) ms, (?P<nfev>\d+) "
+                        r"(?P<counted>RHS evaluations|Taylor steps)(?: \((?P<ratio>\S+)× the cost\))?$")
+
+
+def test_the_readme_advise_example_is_what_advise_prints() -> None:
+    """README.md's ``advise`` transcript, re-rendered by ``bench.advise.render.render_text`` from the values it
+    shows, is the same text: its format is today's, its physics key is the built-in scene's, the settings are
+    ones the default matrix sweeps, the runs are in increasing cost, each ratio is its cost over the
+    recommendation's (within the rounding of the printed costs), and every run shown meets the target. The
+    numbers themselves come from a run of the default matrix and cannot be recomputed here."""
+    from foucault_bench.bench.advise.answer import Advice
+    from foucault_bench.bench.advise.render import TAYLOR_FAMILY, render_text
+    from foucault_bench.bench.advise.target import parse_target
+    from foucault_bench.bench.problems.scenes import SCENES
+    from foucault_bench.bench.schema import setting_label
+    from foucault_bench.integrators import get_integrator
+
+    transcripts = ADVISE_TRANSCRIPT.findall((ROOT / "README.md").read_text(encoding="utf-8"))
+    assert len(transcripts) == 1, "README.md: one `foucault-bench advise` transcript expected"
+    scene_name, target_text, output = transcripts[0]
+    target, problems = parse_target(target_text)
+    assert target is not None, problems
+    lines = output.rstrip("\n").splitlines()
+    runs = [ADVISE_RUN.match(line) for line in lines[1:-2]]
+    assert runs and all(runs), f"README.md: an advise line is not in today's format: {lines[1:-2]}"
+    swept = {(run.integrator, setting_label(run.kh, run.tol)) for run in load_matrix("default").runs}
+    records, ratios = [], []
+    for match in runs:
+        assert match is not None
+        family = get_integrator(match["integrator"]).family
+        assert (match["counted"] == "Taylor steps") == (family == TAYLOR_FAMILY), match.group(0)
+        assert (match["integrator"], match["setting"]) in swept, f"not a run of the default matrix: {match.group(0)}"
+        assert match["metric"] == target.metric and float(match["error"]) <= target.value, match.group(0)
+        kind, value = match["setting"].split("=")
+        records.append({"integrator": match["integrator"], kind: float(value), target.metric: float(match["error"]),
+                        "cost_s": float(match["cost_ms"]) * 1e-3, "nfev": float(match["nfev"]), "family": family})
+        ratios.append(float(match["ratio"]) if match["ratio"] else 1.0)
+    costs = [record["cost_s"] for record in records]
+    assert costs == sorted(costs), f"README.md: the advise example's runs are not in increasing cost: {costs}"
+    for ratio, cost in zip(ratios, costs, strict=True):
+        assert ratio == pytest.approx(cost / costs[0], rel=1e-2), (ratio, cost / costs[0])
+    stored = re.fullmatch(rf"from (\d+) stored runs of {scene_name}; (\d+) meet the target", lines[-1])
+    assert stored and int(stored[2]) <= int(stored[1]), lines[-1]
+    assert lines[-2].startswith(f"model: {SCENES[scene_name].model} "), lines[-2]
+    advice = Advice(scene=SCENES[scene_name], target=target, cost="cpu_time_s" if runs[0]["kind"] == "CPU"
+                    else "wall_time_s", recommended=records[0], alternatives=records[1:],
+                    model={"text": lines[-2].removeprefix("model: ")}, stored_runs=int(stored[1]),
+                    meeting=int(stored[2]))
+    without_ratios = [re.sub(r" \(\S+× the cost\)$", "", line) for line in lines]
+    rendered = [re.sub(r" \(\S+× the cost\)$", "", line) for line in render_text(advice).splitlines()]
+    assert rendered == without_ratios
