@@ -38,7 +38,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("ensemble", "TEXT", "", "the ensemble the scene is a member of (bench.problems.ensemble); NULL for a scene of its own"),
     Column("ensemble_member", "TEXT", "", "the member's swept fields and values, a JSON object in the ensemble's order ({\"latitude_deg\": -90.0}); NULL outside an ensemble"),
     Column("ensemble_setting", "TEXT", "", "the setting as the matrix asked for it (kh=0.05, tol=1e-06), shared by the members of one setting (a fixed-step run's kh column holds the step taken, which depends on the member's length and output grid); NULL outside an ensemble"),
-    Column("model", "TEXT", "", "model name (linear, seed_planar, spherical)"),
+    Column("model", "TEXT", "", "model name (registry key, models.MODELS)"),
     Column("integrator", "TEXT", "", "integrator name (registry key)"),
     Column("family", "TEXT", "", "integrator family (colours, thresholds)"),
     Column("declared_order", "INTEGER", "", "order of accuracy the integrator declares (NULL where it varies)"),

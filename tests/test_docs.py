@@ -418,3 +418,27 @@ def test_the_readme_advise_example_is_what_advise_prints() -> None:
     without_ratios = [re.sub(r" \(\S+× the cost\)$", "", line) for line in lines]
     rendered = [re.sub(r" \(\S+× the cost\)$", "", line) for line in render_text(advice).splitlines()]
     assert rendered == without_ratios
+
+
+def test_the_gate_columns_in_bench_readme_are_the_ones_the_gate_accepts() -> None:
+    """bench/README.md "Columns: ..." names every column a bound may take (``VALUE_COLUMNS`` for ``max``, ``min``
+    and ``max_abs``; ``MACHINE_COLUMNS`` only for ``max_ratio``) and no column the gate refuses."""
+    from foucault_bench.bench.gate.thresholds import MACHINE_COLUMNS, VALUE_COLUMNS
+
+    text = flowing_text(ROOT / "bench" / "README.md")
+    paragraph = re.search(r"Columns: `max`, `min` and `max_abs` take (.*?) bounds, against", text, re.S)
+    assert paragraph, "bench/README.md: the paragraph on the columns a bound may take is gone"
+    deterministic, machine = paragraph[1].split("; `min_order`")
+    named = set(CODE_SPAN.findall(deterministic))
+    named |= {base + suffix for base in ("precession_rate_error", "precession_rate_ref_error")
+              for suffix in ("_rad_s", "_earth") if "`_rad_s` and `_earth` forms" in deterministic}
+    assert set(VALUE_COLUMNS) <= named, f"not named: {sorted(set(VALUE_COLUMNS) - named)}"
+    assert set(CODE_SPAN.findall(machine)) == set(MACHINE_COLUMNS) | {"max_ratio"}
+
+
+def test_reports_readme_has_a_row_for_every_module_of_reports() -> None:
+    """reports/README.md "The modules": one row per module of ``reports/`` (``__init__.py`` aside), none for a module
+    that is gone."""
+    listed = {row[0] for row in markdown_rows(ROOT / "reports" / "README.md", "| module | job |")}
+    modules = {path.name for path in (ROOT / "reports").glob("*.py") if path.name != "__init__.py"}
+    assert listed == modules, f"missing: {sorted(modules - listed)}; gone: {sorted(listed - modules)}"

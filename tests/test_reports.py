@@ -145,6 +145,23 @@ def test_report_writes_every_file_it_links(report: Path) -> None:
     assert "\\begin{longtable}" in (report / "tables" / "per_integrator.tex").read_text(encoding="ascii")
 
 
+
+def test_reports_readme_lists_the_report_s_sections_in_their_order(report: Path) -> None:
+    """The table of what the report contains, in order (reports/README.md, section `foucault-bench report`): every
+    top-level section of ``REPORT.md`` has a row, and the rows of the sections this report has come in the
+    report's order (a scene's page is the row "Scene NAME"; "Per scene", the links to those pages, belongs to the
+    Overview's row)."""
+    readme = (Path(__file__).resolve().parents[1] / "reports" / "README.md").read_text(encoding="utf-8")
+    table = readme[readme.index("| section | what | from |"):].split("\n\n")[0].splitlines()[2:]
+    documented = [row.split("|")[1].strip() for row in table]
+    headings = [line[3:] for line in (report / "REPORT.md").read_text(encoding="utf-8").splitlines()
+                if line.startswith("## ")]
+    named = ["Scene NAME (one page per scene)" if heading.startswith("Scene ") else
+             "Overview" if heading == "Per scene" else heading for heading in headings]
+    in_order = [name for index, name in enumerate(named) if index == 0 or name != named[index - 1]]
+    assert set(in_order) <= set(documented), f"sections without a row: {sorted(set(in_order) - set(documented))}"
+    assert [name for name in documented if name in in_order] == in_order
+
 def test_png_figures_are_real_images(report: Path) -> None:
     from matplotlib.image import imread
 
