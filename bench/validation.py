@@ -71,6 +71,11 @@ def finite_number(value: Any, *, positive: bool = False) -> bool:
     return is_number(value) and math.isfinite(value) and (not positive or value > 0)
 
 
+def git_repository_problem(path: Path, option: str = "--repo") -> str | None:
+    """The problem with ``path`` as the git repository of ``option`` (one line), or ``None`` when it is one."""
+    return None if (Path(path) / ".git").exists() else f"{option} {path}: not a git repository (no .git in it)"
+
+
 def built_in_names(folder: str) -> list[str]:
     """Names (file stems) of the ``*.toml`` files shipped in the package folder ``folder``."""
     directory = importlib.resources.files(DATA_PACKAGE).joinpath(folder)

@@ -138,16 +138,32 @@ sys.exit(build.write_report(Path(sys.argv[1]), None, Path(sys.argv[2]), studies=
 a count of the runs it was handed."""
 
 
-def _read_only_runner(folder: Path):
-    """A function running a command line in a subprocess that cannot write ``folder``: a read-only bind mount in
-    a private mount namespace when running as root (a root process ignores permission bits), else the folder's
-    write permission removed. Skips the test where neither is possible."""
+READ_ONLY_WAYS = ("a read-only mount", "no write permission")
+"""The two ways a folder is read-only, which SQLite reports differently: a read-only file system makes the -shm
+file impossible to open (SQLITE_CANTOPEN), a folder without write permission one it may not create
+(SQLITE_READONLY_DIRECTORY)."""
+DROP_FILE_CAPABILITIES = ["setpriv", "--bounding-set=-dac_override,-dac_read_search,-fowner"]
+"""A root process ignores permission bits; without these capabilities it obeys them as any user does."""
+
+
+def _read_only_runner(folder: Path, way: str = READ_ONLY_WAYS[0]):
+    """A function running a command line in a subprocess that cannot write ``folder``, made read-only in ``way``
+    (``READ_ONLY_WAYS``): a read-only bind mount in a private mount namespace, or the folder's write permission
+    removed (for root, with the file capabilities dropped). As a user, both are the permission bits. Skips the
+    test where neither is possible."""
     python = [sys.executable]
-    if os.geteuid() != 0:
+    if os.geteuid() != 0 or way == "no write permission":
+        prefix: list[str] = []
+        if os.geteuid() == 0:
+            if shutil.which("setpriv") is None or subprocess.run(
+                    [*DROP_FILE_CAPABILITIES, "true"], capture_output=True).returncode != 0:
+                pytest.skip("cannot drop root's file capabilities here (no setpriv)")
+            prefix = DROP_FILE_CAPABILITIES
+
         def run(argv: list[str]) -> subprocess.CompletedProcess:
             folder.chmod(0o555)
             try:
-                return subprocess.run(python + argv, capture_output=True, text=True, timeout=600)
+                return subprocess.run(prefix + python + argv, capture_output=True, text=True, timeout=600)
             finally:
                 folder.chmod(0o755)
         return run
@@ -162,7 +178,9 @@ def _read_only_runner(folder: Path):
     return run_mounted
 
 
-def test_a_wal_database_in_a_read_only_folder_is_read_by_results_check_and_report(real_database, tmp_path) -> None:
+@pytest.mark.parametrize("way", READ_ONLY_WAYS)
+def test_a_wal_database_in_a_read_only_folder_is_read_by_results_check_and_report(real_database, tmp_path,
+                                                                                   way: str) -> None:
     """SQLite cannot open a WAL database read-only where it cannot create the -shm file (sqlite.org/wal.html):
     the store opens it immutable there. What the commands print is the database's own content."""
     database, _, thresholds = real_database
@@ -178,7 +196,7 @@ def test_a_wal_database_in_a_read_only_folder_is_read_by_results_check_and_repor
     for leftover in folder.glob("runs.sqlite-*"):  # the reader above leaves SQLite's -wal and -shm
         leftover.unlink()
     before = _digest(copy)
-    run = _read_only_runner(folder)
+    run = _read_only_runner(folder, way)
     cli = ["-m", "foucault_bench.bench.cli"]
     listed = run([*cli, "results", "--db", str(copy)])
     assert listed.returncode == 0, listed.stderr

@@ -16,6 +16,7 @@ import io
 import json
 import math
 import sqlite3
+import subprocess
 
 import numpy as np
 import pytest
@@ -279,6 +280,7 @@ def test_revisions_fall_back_to_time_without_the_repository(history_db, tmp_path
     (["history", "--scene", "nowhere"], "--scene 'nowhere': no stored row has it"),
     (["history", "--integrator", "rk5"], "--integrator 'rk5': no stored row has it (did you mean 'rk4'?)"),
     (["check", "--cost"], "--cost compares costs with a baseline"),
+    (["history", "--repo", "/no/such/repository"], "--repo /no/such/repository: not a git repository"),
 ])
 def test_bad_history_input_is_one_line(history_db, capsys, argv, message):
     command = argv[0]
@@ -288,6 +290,20 @@ def test_bad_history_input_is_one_line(history_db, capsys, argv, message):
     error = capsys.readouterr().err.strip().splitlines()
     assert status == 2 and len(error) == 1 and message in error[0]
 
+
+
+def test_history_never_replaces_the_repository_it_reads(history_db, tmp_path, capsys):
+    """``--out`` naming the ``--repo`` folder (or a folder holding it) is refused even with ``--force``: replacing
+    it would delete the repository, ``.git`` included."""
+    repository = tmp_path / "project" / "repository"
+    repository.mkdir(parents=True)
+    subprocess.run(["git", "init", "-q", str(repository)], check=True)
+    for out in (repository, repository.parent):
+        status, _ = run_cli(["history", "--db", str(history_db["db"]), "--repo", str(repository), "--out", str(out),
+                             "--force"])
+        error = capsys.readouterr().err.strip().splitlines()
+        assert status == 2 and len(error) == 1 and "holds --repo" in error[0], error
+        assert (repository / ".git" / "HEAD").is_file()
 
 def test_a_database_without_provenance_is_refused(history_db, tmp_path, capsys):
     copy = tmp_path / "bare.sqlite"

@@ -317,3 +317,43 @@ def test_the_report_says_how_each_family_s_cost_was_measured() -> None:
     text = cost_basis_sentences(runs)
     assert "Family runge-kutta: dopri5: compiled" in text and "scipy_rk45: Python-driven" in text
     assert "Family multistep: cvode_bdf_py: Python-driven" in text
+
+
+def test_a_database_where_every_run_timed_out_is_reported_and_advised_on(tmp_path: Path, monkeypatch,
+                                                                         capsys) -> None:
+    """Every run of the matrix timed out, so every verdict column is NULL in the database: the report says so
+    (each integrator's row counts its timeouts) and ``advise`` says no run meets the target (exit status 1),
+    instead of a traceback (the columns once came back as Python ``None`` objects, and ``abs`` of one raised)."""
+    from foucault_bench.bench.cli import main as cli_main
+    from foucault_bench.bench.problems.scene_key import scene_key
+    from foucault_bench.bench.problems.scenes import SCENES
+    from foucault_bench.bench.run.matrix import Matrix
+    from foucault_bench.bench.run.store import ResultsStore
+    from foucault_bench.bench.run.timing import TimingPolicy
+    from foucault_bench.reports import study_sections
+
+    scene = SCENES["seed_2min"]
+    database = tmp_path / "timeouts.sqlite"
+    matrix = Matrix(name="timeouts", description="", source="test", scenes=(), runs=(), plugins=(),
+                    timing=TimingPolicy())
+    with ResultsStore(database) as store:
+        matrix_id, _ = store.start_matrix_run(matrix, jobs=1, scheduler=None, resume=False)
+        for number, (integrator, family, kh, tol) in enumerate((("rk4", "runge-kutta", 0.1, None),
+                                                                ("dopri5", "runge-kutta", None, 1e-8))):
+            row = dict.fromkeys(COLUMN_NAMES)
+            row.update(run_key=f"k{number}", matrix_id=matrix_id, scene=scene.name, scene_key=scene_key(scene),
+                       model=scene.model, integrator=integrator, family=family, kh=kh, tol=tol,
+                       duration_s=scene.duration_s, n_out=scene.n_intervals + 1, status="timeout",
+                       message="run timed out after 1e-06 s (--run-timeout)")
+            store.write_run(row)
+        store.finish_matrix_run(matrix_id)
+    assert cli_main(["advise", "--db", str(database), "--scene", scene.name, "--target", "reference_error=1e-3",
+                     "--no-search"]) == 1  # the exit status of "no run meets the target"
+    answer = capsys.readouterr().out
+    assert "no run meets the target" in answer and "from 2 stored runs of seed_2min; 0 meet the target" in answer
+    monkeypatch.setattr(study_sections, "seed_blocks", lambda folder, prefix: [])
+    out = tmp_path / "report"
+    assert cli_main(["report", "--db", str(database), "--out", str(out), "--studies", "skip"]) == 0
+    per_integrator = pd.read_csv(out / "tables" / "per_integrator.csv")
+    assert sorted(per_integrator["integrator"]) == ["dopri5", "rk4"]
+    assert set(per_integrator["timeout"]) == {1}, per_integrator

@@ -121,8 +121,33 @@ def test_junit_onto_an_input_of_the_check_is_refused(database, thresholds, tmp_p
     junit = spelled(target, "symlink", tmp_path, monkeypatch)
     assert cli_main(["check", "--thresholds", str(thresholds), "--results", str(database), "--junit", junit]) == 2
     lines = error_lines(capsys)
-    assert len(lines) == 1 and f"same file as {victim}" in lines[0], lines
+    expected = "is a SQLite database" if victim == "--results" else f"same file as {victim}"
+    assert len(lines) == 1 and expected in lines[0], lines
     assert sha256(target) == before
+
+
+@pytest.mark.parametrize("command", [
+    ["results", "--db", "{database}", "--csv", "{victim}"],
+    ["results", "--db", "{database}", "--parquet", "{victim}"],
+    ["check", "--thresholds", "{thresholds}", "--results", "{database}", "--junit", "{victim}"],
+    ["perf", "--quick", "--only", "startup", "--markdown", "{victim}"],
+], ids=["csv", "parquet", "junit", "perf markdown"])
+@pytest.mark.parametrize("victim_kind", ["another database", "its -wal file", "its -journal file"])
+def test_no_file_output_is_written_over_a_database(database, thresholds, tmp_path, capsys, command, victim_kind):
+    """An output file that is a SQLite database (any database, not only the command's own input), or a file SQLite
+    keeps beside one, is refused before any work: writing it would destroy the runs it holds."""
+    other = tmp_path / "other.sqlite"
+    tiny_database(other)
+    victim = {"another database": other, "its -wal file": Path(f"{other}-wal"),
+              "its -journal file": Path(f"{other}-journal")}[victim_kind]
+    if not victim.exists():
+        victim.write_bytes(b"SQLite's own bytes")
+    before = {path: sha256(path) for path in (other, victim)}
+    argv = [part.format(database=database, thresholds=thresholds, victim=victim) for part in command]
+    assert cli_main(argv) == 2
+    lines = error_lines(capsys)
+    assert len(lines) == 1 and str(victim) in lines[0] and "SQLite" in lines[0], lines
+    assert {path: sha256(path) for path in (other, victim)} == before
 
 
 def test_a_fresh_check_run_refuses_outputs_onto_its_matrix_or_each_other(thresholds, tmp_path, capsys):

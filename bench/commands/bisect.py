@@ -27,7 +27,7 @@ def main(args: argparse.Namespace) -> int:
     from foucault_bench.bench.errors import InputError
     from foucault_bench.bench.history.bisect import Configuration, bisect
     from foucault_bench.bench.history.changes import ACCURACY_COLUMNS
-    from foucault_bench.bench.validation import suggestion
+    from foucault_bench.bench.validation import git_repository_problem, suggestion
 
     problems = []
     if args.verdict not in ACCURACY_COLUMNS:
@@ -35,8 +35,8 @@ def main(args: argparse.Namespace) -> int:
     for option, value in (("--kh", args.kh), ("--tol", args.tol)):
         if value is not None and not (math.isfinite(value) and value > 0):
             problems.append(f"{option} must be a finite number > 0, got {value:g}")
-    if not (args.repo / ".git").exists():
-        problems.append(f"--repo {args.repo}: not a git repository (no .git in it)")
+    if (problem := git_repository_problem(args.repo)) is not None:
+        problems.append(problem)
     if problems:
         raise InputError(problems)
     configuration = Configuration(args.scene, args.integrator, args.verdict, kh=args.kh, tol=args.tol)

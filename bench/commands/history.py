@@ -29,11 +29,15 @@ def main(args: argparse.Namespace) -> int:
     from tabulate import tabulate
 
     from foucault_bench.bench.commands.outputs import output_folder
+    from foucault_bench.bench.errors import InputError
     from foucault_bench.bench.history.changes import changes_frame
     from foucault_bench.bench.history.load import load_history
+    from foucault_bench.bench.validation import git_repository_problem
 
+    if args.repo is not None and (problem := git_repository_problem(args.repo)) is not None:
+        raise InputError(problem)
     if args.out is not None:
-        output_folder(args.out, "--out", force=args.force, inputs={"--db": args.db})
+        output_folder(args.out, "--out", force=args.force, inputs={"--db": args.db, "--repo": args.repo})
     repository = args.repo if args.repo is not None else Path.cwd()
     history = load_history(args.db, scenes=args.scene, integrators=args.integrator, repository=repository)
     runs = history.rows["run"].nunique()

@@ -11,12 +11,39 @@ from pathlib import Path
 from foucault_bench.bench.atomic import MARKER, read_marker, real_path, recover
 from foucault_bench.bench.errors import InputError
 
+DATABASE_COMPANIONS = ("-wal", "-shm", "-journal")
+"""Files SQLite keeps beside a database (write-ahead log, its shared memory, the rollback journal)."""
+
+
+SQLITE_HEADER = b"SQLite format 3\x00"
+"""The first 16 bytes of every SQLite database file (sqlite.org/fileformat.html, "The Database Header")."""
+
+
+def _is_database(path: Path) -> bool:
+    """Whether ``path`` is a regular file that starts with ``SQLITE_HEADER`` (a pipe or a device is never read)."""
+    if not path.is_file():
+        return False
+    try:
+        with path.open("rb") as file:
+            return file.read(len(SQLITE_HEADER)) == SQLITE_HEADER
+    except OSError:
+        return False
+
 
 def output_file(path: str | Path, option: str) -> Path:
-    """A file the command will create or replace: not a folder, in an existing folder it may write to."""
+    """A file the command will create or replace: not a folder, in an existing folder it may write to, and never
+    a SQLite database or one of the files SQLite keeps beside one (``DATABASE_COMPANIONS``): a results database
+    is not an output any command writes as a file."""
     path = Path(path)
     if path.is_dir():
         raise InputError(f"{option} {path}: is a folder; give a file name")
+    if _is_database(path):
+        raise InputError(f"{option} {path}: is a SQLite database, which writing it would destroy; give another file")
+    for suffix in DATABASE_COMPANIONS:
+        database = path.with_name(path.name.removesuffix(suffix))
+        if path.name.endswith(suffix) and _is_database(database):
+            raise InputError(f"{option} {path}: is SQLite's {suffix} file of the database {database}; give another "
+                             "file")
     if path.exists():
         if not os.access(path, os.W_OK):
             raise InputError(f"{option} {path}: the file is not writable")
@@ -50,10 +77,6 @@ def creatable(path: str | Path, option: str, *, folder: bool) -> Path:
     if not os.access(ancestor, os.W_OK):
         raise InputError(f"{option} {path}: cannot create folders in {ancestor}")
     return path
-
-
-DATABASE_COMPANIONS = ("-wal", "-shm", "-journal")
-"""Files SQLite keeps beside a database (write-ahead log, its shared memory, the rollback journal)."""
 
 
 def _same_file(first: Path, second: Path) -> bool:

@@ -25,6 +25,7 @@ from foucault_bench.bench.history.changes import paired_cost_change
 from foucault_bench.bench.history.paired_cost import Side, paired_times
 from foucault_bench.bench.problems.scene_key import scene_labels
 from foucault_bench.bench.schema import setting_label
+from foucault_bench.bench.validation import git_repository_problem
 
 PAIRED_CYCLES = 5
 PAIRED_PROCESS_SETS = 2
@@ -43,8 +44,8 @@ def _timed(sides: list[Side], matrix: Path, progress: Callable[[str], None]
 def resolved_revision(repository: Path, revision: str) -> str:
     """The commit of ``--cost-paired REV`` in ``--repo``; ``InputError`` (one line) when either is unknown,
     before anything runs."""
-    if not (repository / ".git").exists():
-        raise InputError(f"--repo {repository}: not a git repository (no .git in it)")
+    if (problem := git_repository_problem(repository)) is not None:
+        raise InputError(problem)
     return resolve(repository.resolve(), revision, "--cost-paired")
 
 

@@ -38,7 +38,7 @@ from foucault_bench.bench.run.store_schema import (
     ADEQUACY_TABLE, DAMAGED_CODES, MATRIX_RUNS_TABLE, RESERVED_TABLES, RUNS_TABLE, check_readable,
     create_tables, read_only_connection, schema_version, select_list, table_exists,
 )
-from foucault_bench.bench.schema import COLUMN_NAMES, SCHEMA_VERSION
+from foucault_bench.bench.schema import COLUMN_NAMES, COLUMNS, SCHEMA_VERSION
 
 if TYPE_CHECKING:  # pandas is imported by the methods that build frames, not at start-up
     import pandas as pd
@@ -48,6 +48,10 @@ if TYPE_CHECKING:  # pandas is imported by the methods that build frames, not at
 DEFAULT_DB = Path("results") / "foucault.sqlite"
 _TABLE_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 Result = TypeVar("Result")
+
+REAL_DTYPES = {column.name: "float64" for column in COLUMNS if column.sql_type == "REAL"}
+"""The REAL columns as float64 in every frame of runs: a column whose stored values are all NULL (every run of a
+scene failed or timed out) would otherwise come back as Python ``None`` objects, on which no arithmetic works."""
 
 
 def utc_now() -> str:
@@ -300,11 +304,13 @@ class ResultsStore:
         import pandas as pd
 
         if all_runs:
-            return pd.read_sql_query(f"SELECT {self._run_columns} FROM {RUNS_TABLE} ORDER BY rowid", self.connection)
+            return pd.read_sql_query(f"SELECT {self._run_columns} FROM {RUNS_TABLE} ORDER BY rowid", self.connection,
+                                     dtype=REAL_DTYPES)
         return pd.read_sql_query(
             f"SELECT {self._run_columns} FROM {RUNS_TABLE} WHERE matrix_id = ? ORDER BY rowid",
             self.connection,
             params=(self.resolve_matrix_id(matrix_id),),
+            dtype=REAL_DTYPES,
         )
 
     @_guarded

@@ -52,13 +52,19 @@ DAMAGED_CODES = (sqlite3.SQLITE_CORRUPT, sqlite3.SQLITE_NOTADB)
 malformed", SQLITE_NOTADB "file is not a database")."""
 
 
+CANNOT_MAKE_WAL_FILES = (sqlite3.SQLITE_CANTOPEN, sqlite3.SQLITE_READONLY)
+"""SQLite's primary result codes when it cannot open or create a WAL database's ``-shm`` file: CANTOPEN on a
+read-only file system, READONLY (extended code SQLITE_READONLY_DIRECTORY) in a folder without write permission
+(sqlite.org/rescode.html)."""
+
+
 def read_only_connection(path: Path) -> sqlite3.Connection:
     """A read-only connection (SQLite URI ``mode=ro``) to the database ``path``, its schema version read.
 
     Never changes the file or its journal mode. SQLite opens a write-ahead-log (WAL) database read-only only if
     its ``-shm`` and ``-wal`` files exist or can be created, or if the database is opened as immutable
     (sqlite.org/wal.html, "Read-Only Databases", SQLite ≥ 3.22). So when SQLite cannot open the file
-    (SQLITE_CANTOPEN) in a folder this process cannot write, and no ``-wal`` file holds changes (everything is
+    (``CANNOT_MAKE_WAL_FILES``) in a folder this process cannot write, and no ``-wal`` file holds changes (everything is
     in the main file), it is opened with ``immutable=1`` (sqlite.org/uri.html): safe there, since no writer can
     change it either (a writer needs its ``-wal`` or journal file in that folder). A ``-wal`` file holding
     changes in such a folder cannot be read without its ``-shm``: ``InputError``, with what to do. A reader of a
@@ -72,7 +78,8 @@ def read_only_connection(path: Path) -> sqlite3.Connection:
         return connection
     except sqlite3.OperationalError as error:
         connection.close()
-        if getattr(error, "sqlite_errorcode", 0) & 0xFF != sqlite3.SQLITE_CANTOPEN or os.access(path.parent, os.W_OK):
+        primary_code = getattr(error, "sqlite_errorcode", 0) & 0xFF
+        if primary_code not in CANNOT_MAKE_WAL_FILES or os.access(path.parent, os.W_OK):
             raise
     log = Path(f"{path}-wal")
     if log.exists() and log.stat().st_size > 0:
