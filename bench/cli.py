@@ -30,6 +30,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser_for(argv)
     args = parser.parse_args(argv)
     try:
+        if problems := empty_values(argv):
+            raise InputError(problems)
         status = int(_module(args.command).main(args) or 0)
         sys.stdout.flush()  # here, so that a closed pipe is reported below and not at exit
         return status
@@ -58,6 +60,21 @@ def main(argv: list[str] | None = None) -> int:
         if not is_full_disk(error):
             raise
         return _full_disk(args.command, error)
+
+
+def empty_values(argv: list[str]) -> list[str]:
+    """One problem per empty argument (``--csv ""``, ``--csv=``): no option takes an empty text, and a path given
+    empty would otherwise be read as the current folder or as the option left out."""
+    problems = []
+    for position, token in enumerate(argv):
+        option, equals, value = token.partition("=")
+        if token.startswith("--") and equals and not value:
+            problems.append(f"{option}: an empty value; give one")
+        elif token == "":
+            before = argv[position - 1] if position else ""
+            named = before if before.startswith("-") and "=" not in before else "an argument"
+            problems.append(f"{named}: an empty value; give one")
+    return problems
 
 
 def _full_disk(command: str, error: BaseException) -> int:

@@ -178,6 +178,11 @@ CASES: tuple[Case, ...] = (
          files=(("m.toml", TINY),)),
     # --- results and report ---
     Case("results on a missing database", ("results", "--db", "{d}/none.sqlite"), ("no results database",)),
+    Case("an empty --csv", ("results", "--db", "{d}/none.sqlite", "--csv", ""), ("--csv: an empty value",)),
+    Case("an empty --results=", ("check", "--thresholds", "default", "--results="), ("--results: an empty value",)),
+    Case("an empty --db and --scheduler", ("run", "--matrix", "quick", "--db", "", "--scheduler", ""),
+         ("--db: an empty value", "--scheduler: an empty value"), problems=2),
+    Case("an empty --repo", ("history", "--db", "{d}/none.sqlite", "--repo", ""), ("--repo: an empty value",)),
     Case("results on a foreign database", ("results", "--db", "{d}/foreign.sqlite"), ("foreign.sqlite",),
          setup=_foreign_database),
     Case("csv in a missing folder", ("results", "--db", "{d}/none.sqlite", "--csv", "{d}/no/rows.csv"),

@@ -380,3 +380,23 @@ def test_the_matrix_a_thresholds_file_names_is_found_beside_it_and_nowhere_else(
     assert "'from_beside_the_file'" in capsys.readouterr().err
     built_in = load_thresholds(write_toml_lines(gate / "named.toml", ['matrix = "quick"', *GATE_ON_STORED]))
     assert built_in.matrix_to_run() == "quick"  # a built-in name, with no file of that name beside
+
+
+def test_junit_xml_holds_texts_xml_cannot_as_their_escapes() -> None:
+    """A basis, scene or integrator name with characters XML 1.0 cannot hold (control characters, a terminal's
+    escape) still gives a file every XML parser reads, those characters written as their escapes; tabs, newlines
+    and the rest of Unicode are kept."""
+    from foucault_bench.bench.gate.evaluate import Outcome
+    from foucault_bench.bench.gate.render import junit_xml
+    from foucault_bench.bench.gate.thresholds import Bound, Selection
+
+    bound = Bound(number=1, selection=Selection(scenes=("s\x01",)), kind="max", limit=1e-6,
+                  column="reference_error", basis="theory:\x1b[31m red\x1b[0m, é\tand ≤ <&>")
+    outcome = Outcome(bound=bound, scene="s\x01", integrator="rk\x0b4", setting="kh=0.1", measured=2e-6,
+                      margin=0.5, passed=False, margin_is_factor=True)
+    text = ElementTree.tostring(junit_xml([outcome], suite="x\x00").getroot(), encoding="unicode")
+    root = ElementTree.fromstring(text)  # a parser refuses a file holding any of them
+    case = root.find("testsuite/testcase")
+    assert case is not None and case.get("classname") == "check.s\\x01.rk\\x0b4"
+    assert root.find("testsuite").get("name") == "x\\x00"
+    assert "basis: theory:\\x1b[31m red\\x1b[0m, é\tand ≤ <&>" in case.find("system-out").text

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import xml.etree.ElementTree as ElementTree
 from typing import Sequence
 
@@ -75,5 +76,18 @@ def junit_xml(outcomes: Sequence[Outcome], *, suite: str) -> ElementTree.Element
             failure.text = measured
         ElementTree.SubElement(case, "system-out").text = "; ".join(
             filter(None, [measured, outcome.detail, outcome.bound.basis and f"basis: {outcome.bound.basis}"]))
+    for element in suites.iter():  # texts from the user's files and database, made writable as XML 1.0
+        element.text = element.text and _xml_characters(element.text)
+        element.attrib = {key: _xml_characters(value) for key, value in element.attrib.items()}
     ElementTree.indent(suites)
     return ElementTree.ElementTree(suites)
+
+
+_NOT_IN_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff\ud800-\udfff]")
+"""Characters XML 1.0 cannot hold, escaped or not (w3.org/TR/xml, production [2] Char)."""
+
+
+def _xml_characters(text: str) -> str:
+    """``text`` with each character XML cannot hold written as its Python escape (``\\x01``): an XML parser
+    refuses the whole file for one of them."""
+    return _NOT_IN_XML.sub(lambda match: match.group().encode("unicode_escape").decode("ascii"), text)
