@@ -19,8 +19,8 @@ from foucault_bench.bench.validation import built_in_names
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--matrix", default="default",
-                        help=f"a built-in matrix name ({', '.join(built_in_names('matrices'))}) or a path to a matrix TOML "
-                             "file (default: %(default)s)")
+                        help=f"a built-in matrix name ({', '.join(built_in_names('matrices'))}) or a path to a "
+                             "matrix TOML file (default: %(default)s)")
     parser.add_argument("--db", default=str(DEFAULT_DB), help="results database (SQLite; default: %(default)s)")
     parser.add_argument("--jobs", type=int, default=None,
                         help="worker processes, one single-threaded worker per core (default, and at most: the "

@@ -64,12 +64,12 @@ def read_only_connection(path: Path) -> sqlite3.Connection:
     Never changes the file or its journal mode. SQLite opens a write-ahead-log (WAL) database read-only only if
     its ``-shm`` and ``-wal`` files exist or can be created, or if the database is opened as immutable
     (sqlite.org/wal.html, "Read-Only Databases", SQLite ≥ 3.22). So when SQLite cannot open the file
-    (``CANNOT_MAKE_WAL_FILES``) in a folder this process cannot write, and no ``-wal`` file holds changes (everything is
-    in the main file), it is opened with ``immutable=1`` (sqlite.org/uri.html): safe there, since no writer can
-    change it either (a writer needs its ``-wal`` or journal file in that folder). A ``-wal`` file holding
-    changes in such a folder cannot be read without its ``-shm``: ``InputError``, with what to do. A reader of a
-    WAL database in a writable folder leaves the ``-wal`` and ``-shm`` files, as every SQLite reader does; they
-    are SQLite's, not a change of mode.
+    (``CANNOT_MAKE_WAL_FILES``) in a folder this process cannot write, and no ``-wal`` file holds changes
+    (everything is in the main file), it is opened with ``immutable=1`` (sqlite.org/uri.html): safe there, since
+    no writer can change it either (a writer needs its ``-wal`` or journal file in that folder). A ``-wal`` file
+    holding changes in such a folder cannot be read without its ``-shm``: ``InputError``, with what to do. A
+    reader of a WAL database in a writable folder leaves the ``-wal`` and ``-shm`` files, as every SQLite reader
+    does; they are SQLite's, not a change of mode.
     """
     uri = path.resolve().as_uri()
     connection = sqlite3.connect(f"{uri}?mode=ro", uri=True, timeout=30.0)

@@ -3,10 +3,11 @@
 The models form a hierarchy (models/README.md "The models") that each model declares (``Model.refines``;
 ``models.simpler_models``, ``models.richer_models``): linear planar (seed eqs. 6-7) < the seed's nonlinear
 planar (eqs. 4-5) < the spherical pendulum with the full rotation vector < the same on an anisotropic support;
-the anisotropic and the damped linear models refine the linear one, the driven model the damped one. For a scene, every pair of models in
-which the scene's model takes part is integrated with the reference integrator on the scene's grid (each run is a
-cached ``bench.problems.reference`` of the scene with the model replaced) and compared, except where the richer
-model of a pair is its parent at the scene's parameters (``Model.adds_parameters`` all at their defaults):
+the anisotropic and the damped linear models refine the linear one, the driven model the damped one. For a
+scene, every pair of models in which the scene's model takes part is integrated with the reference integrator on
+the scene's grid (each run is a cached ``bench.problems.reference`` of the scene with the model replaced) and
+compared, except where the richer model of a pair is its parent at the scene's parameters
+(``Model.adds_parameters`` all at their defaults):
 
 * ``precession_rate_diff``: (rate of the simpler model − rate of the richer) / (Ω_E|sin φ|), signed, from the
   turning points as in ``bench.verdicts``;
