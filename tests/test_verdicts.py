@@ -13,6 +13,8 @@ from foucault_bench.bench.problems.scenes import SCENES, Scene
 from foucault_bench.bench.verdicts.columns import compute_verdicts
 from foucault_bench.bench.verdicts.convergence import observed_order
 from foucault_bench.bench.problems.turning_points import (
+    HERMITE_NODES,
+    LocalHermite,
     azimuth_error_bound,
     grid_accelerations,
     precession_rate,
@@ -22,6 +24,7 @@ from foucault_bench.bench.problems.turning_points import (
 )
 from foucault_bench.integrators import STATUS_DIVERGED, STATUS_FAILED, Solution, get_integrator
 from foucault_bench.models.analytic import linear_exact
+from scipy.optimize.elementwise import find_root
 
 
 pytestmark = pytest.mark.usefixtures("fresh_reference_cache")
@@ -105,6 +108,48 @@ def test_grid_turning_points_agree_with_heyoka_event_turning_points() -> None:
     azimuth_tolerance = 10 * HEYOKA_EVENT_TIME_TOLERANCE_S * speed / scene.params.amplitude_m
     assert np.max(np.abs(azimuth_gap)) <= (azimuth_error_bound(scene.params, scene.output_interval_s, scene.duration_s)
                                            + azimuth_tolerance)
+
+
+def scipy_roots(interpolant: LocalHermite) -> np.ndarray:
+    """The roots as scipy finds them: ``find_root`` over all windows at once, default tolerances."""
+    windows = interpolant.coefficients.shape[1]
+    return find_root(interpolant.radial_velocity, (np.zeros(windows), np.ones(windows)),
+                     args=(np.arange(windows),)).x
+
+
+def test_the_compiled_root_finder_finds_scipys_roots_bit_for_bit(monkeypatch: pytest.MonkeyPatch) -> None:
+    # bench.problems.turning_point_roots is find_root's arithmetic compiled: on the windows of trajectories of two
+    # models (a spherical run of dopri5 at a loose tolerance, the sampled exact linear solution, the latter with
+    # relative noise of 1e-9 and 1e-4 on every value) every turning point equals the one scipy's root finder gives
+    spherical = shortened(SCENES["lab_3m"], 360.0)
+    run = get_integrator("dopri5").solve(spherical.problem(), tol=1e-6)
+    linear = SCENES["pantheon"]
+    exact_t = linear.output_grid()
+    exact = linear_exact(linear.params, exact_t)
+    wobble = np.sin(np.arange(exact.size)).reshape(exact.shape)
+    trajectories = [(spherical, run.t, run.y)] + [(linear, exact_t, exact * (1.0 + noise * wobble))
+                                                  for noise in (0.0, 1e-9, 1e-4)]
+    compiled = [turning_points_from_grid(t, y, grid_accelerations(scene.model_object, scene.params, y), True)
+                for scene, t, y in trajectories]
+    monkeypatch.setattr(LocalHermite, "radial_velocity_roots", scipy_roots)
+    for (scene, t, y), points in zip(trajectories, compiled, strict=True):
+        expected = turning_points_from_grid(t, y, grid_accelerations(scene.model_object, scene.params, y), True)
+        assert points.shape == expected.shape and points.shape[0] > 100
+        assert np.array_equal(points, expected)
+
+
+def test_the_compiled_root_finder_agrees_with_scipy_where_a_window_has_no_root() -> None:
+    # random Chebyshev series: many windows do not change sign on [0, 1] (scipy: NaN), the others have roots
+    # anywhere in the interval, with steep and flat ends
+    rng = np.random.default_rng(2026)
+    terms = 3 * HERMITE_NODES
+    coefficients = rng.standard_normal((terms, 2000, 2)) * 0.5 ** np.arange(terms)[:, None, None]
+    for shift in range(HERMITE_NODES - 1):
+        interpolant = LocalHermite(coefficients, HERMITE_NODES, shift)
+        roots = interpolant.radial_velocity_roots()
+        expected = scipy_roots(interpolant)
+        assert 0 < np.count_nonzero(np.isnan(expected)) < expected.size
+        assert np.array_equal(roots, expected, equal_nan=True)
 
 
 # --- the references' rates --------------------------------------------------------------------------------------

@@ -13,8 +13,7 @@ import math
 
 import numpy as np
 from numpy.polynomial import chebyshev
-from scipy.optimize.elementwise import find_root
-
+from foucault_bench.bench.problems.turning_point_roots import radial_velocity_roots
 from foucault_bench.models import Model, PendulumParameters
 
 NAN = math.nan
@@ -30,9 +29,7 @@ def finite_prefix(y: np.ndarray) -> int:
 
 def grid_accelerations(model: Model, params: PendulumParameters, y: np.ndarray) -> np.ndarray:
     """(ẍ, ÿ) in m/s² of ``model`` at every row (x, y, ẋ, ẏ) of ``y``: array (n, 2)."""
-    acceleration = model.numba_acceleration
-    p = params.parameter_vector()
-    return np.array([acceleration(row[0], row[1], row[2], row[3], p) for row in y], dtype=np.float64).reshape(-1, 2)
+    return model.acceleration_on_rows(y, params.parameter_vector())
 
 
 HERMITE_NODES = 6
@@ -49,8 +46,8 @@ def turning_points_from_grid(t: np.ndarray, y: np.ndarray, accelerations: np.nda
     interval the trajectory is the Hermite interpolant of position, velocity and acceleration at the
     ``HERMITE_NODES`` nearest grid points (``local_hermite``: degree 17, interpolation error ∝ (ΩΔ)¹⁸/18!, below
     round-off on every built-in scene; Burden & Faires, Numerical Analysis, §3.4), and the turning point is the
-    root of r·ṙ of that interpolant (Chandrupatla's bracketing method, ``scipy.optimize.elementwise.find_root``),
-    solved in the offset from the interval's start so that the tolerance does not grow with t.
+    root of r·ṙ of that interpolant (Chandrupatla's bracketing method as ``scipy.optimize.elementwise.find_root``
+    runs it, compiled: ``bench.problems.turning_point_roots``), solved in the offset from the interval's start so that the tolerance does not grow with t.
     ``include_release`` prepends (0, x₀, y₀): a release from rest is a turning point. Rows of ``y`` after the
     first non-finite one are ignored.
     """
@@ -79,10 +76,9 @@ def turning_points_from_grid(t: np.ndarray, y: np.ndarray, accelerations: np.nda
             continue
         rows = first[group][:, None] + np.arange(nodes)
         interpolant = local_hermite(nodes, int(shift), spacing, y[rows, :2], y[rows, 2:4], accelerations[rows])
-        roots = find_root(interpolant.radial_velocity, (np.zeros(group.size), np.ones(group.size)),
-                          args=(np.arange(group.size),))
-        when[group] = t[start[group]] + roots.x * spacing
-        where[group] = interpolant.position(roots.x)
+        roots = interpolant.radial_velocity_roots()
+        when[group] = t[start[group]] + roots * spacing
+        where[group] = interpolant.position(roots)
     return np.vstack([release_rows, np.column_stack([when, where])])
 
 
@@ -112,6 +108,12 @@ class LocalHermite:
         position = [chebyshev.chebval(x, self.coefficients[:, window, axis], tensor=False) for axis in (0, 1)]
         slope = [chebyshev.chebval(x, self.derivative[:, window, axis], tensor=False) for axis in (0, 1)]
         return position[0] * slope[0] + position[1] * slope[1]
+
+    def radial_velocity_roots(self) -> np.ndarray:
+        """The offset in [0, 1] where r·ṙ of each window's interpolant vanishes (``radial_velocity`` changes sign
+        between 0 and 1 in every window); NaN where it does not."""
+        return radial_velocity_roots(np.ascontiguousarray(self.coefficients), np.ascontiguousarray(self.derivative),
+                                     self.centre, self.half_width)
 
 
 @functools.lru_cache(maxsize=None)
@@ -147,9 +149,11 @@ def local_hermite(nodes: int, shift: int, spacing_s: float, position: np.ndarray
     u, d/dx = half-width·Δ·d/dt."""
     scale = 0.5 * (nodes - 1) * spacing_s
     data = np.stack([position, scale * velocity, scale * scale * acceleration], axis=2)  # (windows, nodes, 3, 2)
-    data = data.reshape(data.shape[0], 3 * nodes, 2)
-    coefficients = np.einsum("kc,wcd->kwd", _hermite_system(nodes), data.astype(np.longdouble))
-    return LocalHermite(coefficients.astype(np.float64), nodes, shift)
+    windows = data.shape[0]
+    conditions = np.moveaxis(data.reshape(windows, 3 * nodes, 2), 1, 0).reshape(3 * nodes, 2 * windows)
+    # one matrix product (terms × conditions)·(conditions × 2·windows), summed in the conditions' order
+    coefficients = np.matmul(_hermite_system(nodes), conditions.astype(np.longdouble))
+    return LocalHermite(coefficients.astype(np.float64).reshape(3 * nodes, windows, 2), nodes, shift)
 
 
 def least_squares_slope(x: np.ndarray, y: np.ndarray) -> float:

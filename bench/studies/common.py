@@ -28,9 +28,9 @@ from foucault_bench.models import Model, PendulumParameters
 def relative_energy_error(model: Model, params: PendulumParameters, states: np.ndarray) -> np.ndarray:
     """(E(t) − E₀) / E_swing on the rows of ``states`` (columns x, y, ẋ, ẏ), with E₀ and E_swing from
     ``bench.verdicts.columns.energy_scale`` (the normalisation of the results table) and E from the model's own energy
-    source evaluated with numpy (``models.base``: the same source the compiled code uses)."""
+    source evaluated on the arrays (``Model.energy_on_rows``: the compiled code's values, bit for bit)."""
     energy0, swing = energy_scale(model, params)
-    energy = model.energy(np, states[:, 0], states[:, 1], states[:, 2], states[:, 3], params.parameter_vector())
+    energy = model.energy_on_rows(states, params.parameter_vector())
     return (energy - energy0) / swing
 
 

@@ -85,9 +85,7 @@ def energy_verdicts(model: Model, params: PendulumParameters, solution: Solution
     if n < MIN_INTEGRATED_ROWS:  # only the initial state, which is given, not computed: no data
         n = 0
     energy0, swing = energy_scale(model, params)
-    p = params.parameter_vector()
-    energy = model.numba_energy
-    values = np.array([energy(row[0], row[1], row[2], row[3], p) for row in solution.y[:n]], dtype=np.float64)
+    values = model.energy_on_rows(solution.y[:n], params.parameter_vector())
     relative = (values - energy0) / swing
     drift = least_squares_slope(solution.t[:n], relative) if n >= 2 else NAN
     streamed = solution.streamed.energy_max_rel_error if solution.streamed is not None else None

@@ -108,8 +108,6 @@ def energy_balance_max_rel_error(model: Model, params: PendulumParameters, t: np
     n = finite_prefix(y)
     if n < 2:
         return float("nan")
-    p = params.parameter_vector()
-    energy = model.numba_energy
-    values = np.array([energy(row[0], row[1], row[2], row[3], p) for row in y[:n]], dtype=np.float64)
+    values = model.energy_on_rows(y[:n], params.parameter_vector())
     residual = values - energy0_j_kg - cumulative_work(model, params, t[:n], y[:n])
     return float(np.max(np.abs(residual))) / swing_j_kg
