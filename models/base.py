@@ -229,7 +229,8 @@ class Model:
         states = np.asarray(states, dtype=np.float64)
         out = np.empty((states.shape[0], 2))
         with np.errstate(all="ignore"):  # as numba's error_model="numpy": infinities and NaN, no warning
-            out[:, 0], out[:, 1] = self.acceleration(ARRAY_MATH, *states[:, :4].T, p)
+            out[:, 0], out[:, 1] = self.acceleration(ARRAY_MATH, states[:, 0], states[:, 1], states[:, 2],
+                                                     states[:, 3], p)
         return out
 
     def energy_on_rows(self, states: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -238,7 +239,7 @@ class Model:
         states = np.asarray(states, dtype=np.float64)
         out = np.empty(states.shape[0])
         with np.errstate(all="ignore"):
-            out[:] = self.energy(ARRAY_MATH, *states[:, :4].T, p)
+            out[:] = self.energy(ARRAY_MATH, states[:, 0], states[:, 1], states[:, 2], states[:, 3], p)
         return out
 
     # --- numba ----------------------------------------------------------------------------------------------

@@ -53,7 +53,7 @@ import os
 import threading
 import time
 import types
-from typing import Callable, Iterator, cast
+from typing import Callable, Iterator, overload
 
 from numba.core import sigutils
 from numba.core.caching import FunctionCache, IndexDataCacheFile
@@ -214,6 +214,14 @@ class _SharedDispatcher(CPUDispatcher):
             return entry
 
 
+@overload
+def jit(fn: Callable, **options) -> Dispatcher: ...
+
+
+@overload
+def jit(fn: None = None, **options) -> Callable[[Callable], Dispatcher]: ...
+
+
 def jit(fn: Callable | None = None, **options) -> Dispatcher | Callable[[Callable], Dispatcher]:
     """Compile ``fn`` with numba (nopython, ``JIT_OPTIONS`` plus ``options``), cached on disk under a
     deterministic key. Use as ``@jit`` or ``@jit(inline="always")``.
@@ -224,7 +232,7 @@ def jit(fn: Callable | None = None, **options) -> Dispatcher | Callable[[Callabl
     compiled in different processes would otherwise load under one symbol name into a third process.
     """
     if fn is None:
-        return lambda function: cast(Dispatcher, jit(function, **options))
+        return lambda function: jit(function, **options)
     digest = hashlib.sha256(f"{_fingerprint(fn, set())}{sorted(options.items())}".encode()).hexdigest()[:16]
     unique = types.FunctionType(fn.__code__, fn.__globals__, fn.__name__, fn.__defaults__, fn.__closure__)
     unique.__qualname__ = f"{fn.__qualname__}_{digest}"
