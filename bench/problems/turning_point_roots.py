@@ -71,8 +71,8 @@ def _radial_velocity(coefficients, derivative, centre, half_width, window, offse
 
 @jit
 def _best_and_stop(x1, f1, x2, f2, frtol):
-    """scipy's ``check_termination``: the better end (x, f), whether to stop, and the bracket's width and
-    tolerance."""
+    """scipy's ``check_termination``: the end where |f| is smaller (NaN once the bracket is lost), whether to stop,
+    and the bracket's width and tolerance."""
     if abs(f1) < abs(f2):
         xmin, fmin = x1, f1
     else:

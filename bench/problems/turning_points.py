@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 from numpy.polynomial import chebyshev
+
 from foucault_bench.bench.problems.turning_point_roots import radial_velocity_roots
 from foucault_bench.models import Model, PendulumParameters
 
@@ -47,7 +48,8 @@ def turning_points_from_grid(t: np.ndarray, y: np.ndarray, accelerations: np.nda
     ``HERMITE_NODES`` nearest grid points (``local_hermite``: degree 17, interpolation error ∝ (ΩΔ)¹⁸/18!, below
     round-off on every built-in scene; Burden & Faires, Numerical Analysis, §3.4), and the turning point is the
     root of r·ṙ of that interpolant (Chandrupatla's bracketing method as ``scipy.optimize.elementwise.find_root``
-    runs it, compiled: ``bench.problems.turning_point_roots``), solved in the offset from the interval's start so that the tolerance does not grow with t.
+    runs it, compiled: ``bench.problems.turning_point_roots``), solved in the offset from the interval's start so
+    that the tolerance does not grow with t.
     ``include_release`` prepends (0, x₀, y₀): a release from rest is a turning point. Rows of ``y`` after the
     first non-finite one are ignored.
     """
