@@ -17,6 +17,7 @@ stream named ``state``), so a new field changes no other field's draws.
 from __future__ import annotations
 
 import dataclasses
+import math
 import warnings
 import zlib
 from typing import Any, Callable
@@ -26,6 +27,7 @@ import numpy as np
 import pytest
 
 from foucault_bench.models import MODELS, Model, PendulumParameters
+from foucault_bench.models.base import ARRAY_MATH
 from foucault_bench.models.parameters import (
     P_K2, P_LENGTH, PARAMETER_COUNT, PARAMETER_SLOTS, PARAMETER_VECTOR_NAMES,
 )
@@ -146,6 +148,18 @@ def test_the_source_on_arrays_gives_numbas_values_bit_for_bit(model: Model) -> N
         assert np.array_equal(acceleration, expected_acceleration, equal_nan=True)
         assert np.array_equal(energy, expected_energy, equal_nan=True)
     assert np.all(np.isnan(model.acceleration_on_rows(off_sphere, pars[0]))) == model.constrained_to_sphere
+
+
+def test_the_array_namespace_takes_sin_and_cos_from_the_c_library_on_numbers_and_arrays() -> None:
+    # a model source may call m.sin or m.cos on a state (no built-in model does yet): on an array each element is
+    # math's value, the C library's, which numba's compiled code calls
+    values = np.random.default_rng(5).uniform(-50.0, 50.0, 1000)
+    for name in ("sin", "cos"):
+        function, exact = getattr(ARRAY_MATH, name), getattr(math, name)
+        on_array = function(values)
+        assert on_array.dtype == np.float64 and on_array.shape == values.shape
+        assert np.array_equal(on_array, [exact(value) for value in values])
+        assert function(values[0]) == exact(values[0])
 
 
 LENGTH_SLOTS = tuple(index for index, slot in enumerate(PARAMETER_SLOTS) if slot.unit == "m")

@@ -63,7 +63,7 @@ def _chebval(coefficients, window, axis, x):
 
 @jit
 def _radial_velocity(coefficients, derivative, centre, half_width, window, offset):
-    """``LocalHermite.radial_velocity`` of one window at one offset: r·dr/dx of the interpolant."""
+    """r·dr/dx of one window's interpolant at one offset (the sign and the root of r·ṙ)."""
     x = (offset - centre) / half_width
     return (_chebval(coefficients, window, 0, x) * _chebval(derivative, window, 0, x)
             + _chebval(coefficients, window, 1, x) * _chebval(derivative, window, 1, x))
@@ -94,8 +94,8 @@ def _best_and_stop(x1, f1, x2, f2, frtol):
 @jit
 def radial_velocity_roots(coefficients, derivative, centre, half_width):
     """The root in offset ∈ [0, 1] of r·ṙ of each window's interpolant (``coefficients``, ``derivative``: Chebyshev
-    series (terms, windows, 2) of the position and its derivative), as ``find_root(radial_velocity, (0, 1))``
-    returns it in ``res.x`` (NaN where the ends do not bracket a root)."""
+    series (terms, windows, 2) of the position and its derivative), as ``find_root`` returns it in ``res.x`` from the
+    bracket (0, 1) (NaN where the ends do not bracket a root)."""
     windows = coefficients.shape[1]
     roots = np.empty(windows)
     for window in range(windows):

@@ -103,17 +103,9 @@ class LocalHermite:
         return np.stack([chebyshev.chebval(x, self.coefficients[:, :, axis], tensor=False) for axis in (0, 1)],
                         axis=-1)
 
-    def radial_velocity(self, offset: np.ndarray, window: np.ndarray) -> np.ndarray:
-        """r·dr/dx of the interpolant of each ``window`` (index) at its ``offset``: the sign and the root of r·ṙ
-        (the root finder passes the windows it is still working on)."""
-        x = self._x(np.asarray(offset, dtype=np.float64))
-        position = [chebyshev.chebval(x, self.coefficients[:, window, axis], tensor=False) for axis in (0, 1)]
-        slope = [chebyshev.chebval(x, self.derivative[:, window, axis], tensor=False) for axis in (0, 1)]
-        return position[0] * slope[0] + position[1] * slope[1]
-
     def radial_velocity_roots(self) -> np.ndarray:
-        """The offset in [0, 1] where r·ṙ of each window's interpolant vanishes (``radial_velocity`` changes sign
-        between 0 and 1 in every window); NaN where it does not."""
+        """The offset in [0, 1] where r·dr/dx of each window's interpolant vanishes (it changes sign between 0 and 1
+        in every window); NaN where it does not."""
         return radial_velocity_roots(np.ascontiguousarray(self.coefficients), np.ascontiguousarray(self.derivative),
                                      self.centre, self.half_width)
 
