@@ -27,8 +27,9 @@ from __future__ import annotations
 import os
 import sys
 import time
+from contextlib import AbstractContextManager, nullcontext
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Mapping
 
 import pandas as pd
 from foucault_bench.bench.errors import InputError
@@ -38,7 +39,7 @@ from foucault_bench.bench.problems.scene_key import scene_labels
 from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.schema import COLUMN_NAMES
 from foucault_bench.bench.atomic import replacing_folder
-from foucault_bench.bench.studies import STUDIES, ensure_studies
+from foucault_bench.bench.studies import STUDIES, StudyTables
 from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS
 from foucault_bench.reports import ensembles, halls, result_sections, study_sections
 from foucault_bench.reports.builder import INDEX, Builder, ReportInputs, file_stem
@@ -121,24 +122,29 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
         adequacy = store.adequacy(matrix_id)
         if not adequacy.empty:
             adequacy = adequacy.assign(scene=scene_labels(adequacy, runs))
-        study_tables = {} if studies == "skip" else _study_tables(store, db, recompute=studies == "recompute",
-                                                                   jobs=jobs)
         revisions = len(group_revisions(store.matrix_runs(), source=str(db)))
-        inputs = ReportInputs(runs=runs, studies=study_tables, adequacy=adequacy,
-                              provenance={"database": str(db), **_provenance(store, matrix_id)},
-                              targets=targets, static=static, jobs=jobs, revisions=revisions)
-    with replacing_folder(out, "--out", "report") as staging:
-        build_report(inputs, staging, progress=True, previous=out)
-        if revisions > 1:
-            (staging / "history").mkdir()
-            write_history(load_history(db, repository=Path.cwd()), staging / "history")
+        provenance = {"database": str(db), **_provenance(store, matrix_id)}
+        # the missing study tables are computed by worker processes while the sections before theirs are built
+        no_studies: dict[str, pd.DataFrame] = {}
+        tables: AbstractContextManager[Mapping[str, pd.DataFrame]] = (
+            nullcontext(no_studies) if studies == "skip"
+            else _study_tables(store, db, recompute=studies == "recompute", jobs=jobs))
+        with tables as study_tables:
+            inputs = ReportInputs(runs=runs, studies=study_tables, adequacy=adequacy, provenance=provenance,
+                                  targets=targets, static=static, jobs=jobs, revisions=revisions)
+            with replacing_folder(out, "--out", "report") as staging:
+                build_report(inputs, staging, progress=True, previous=out)
+                if revisions > 1:
+                    (staging / "history").mkdir()
+                    write_history(load_history(db, repository=Path.cwd()), staging / "history")
+            computed = dict(study_tables)  # every table stored, the report's studies section or not
     print(f"report written: {out / 'index.html'} and {out / 'REPORT.md'} ({len(runs)} runs, "
-          f"{', '.join(STUDIES) if study_tables else 'no studies'}; {time.perf_counter() - started:.1f} s)")
+          f"{', '.join(computed) if computed else 'no studies'}; {time.perf_counter() - started:.1f} s)")
     return 0
 
 
-def _study_tables(store: ResultsStore, db: Path, recompute: bool, jobs: int) -> dict[str, pd.DataFrame]:
-    """``ensure_studies`` on ``store`` (``jobs`` worker processes), storing what it computes only when the database
+def _study_tables(store: ResultsStore, db: Path, recompute: bool, jobs: int) -> StudyTables:
+    """``StudyTables`` of ``store`` (``jobs`` worker processes), storing what it computes only when the database
     can be written (the file and its folder, where SQLite keeps its journal); else a note names the tables
     computed for this report only."""
     writable = os.access(db, os.W_OK) and os.access(Path(db).resolve().parent, os.W_OK)
@@ -147,7 +153,7 @@ def _study_tables(store: ResultsStore, db: Path, recompute: bool, jobs: int) -> 
         if missing:
             print(f"note: {db} is read-only: the study tables {', '.join(missing)} are computed for this report "
                   "and not stored", file=sys.stderr)
-    return ensure_studies(store, recompute=recompute, store_computed=writable, jobs=jobs)
+    return StudyTables(store, recompute=recompute, store_computed=writable, jobs=jobs)
 
 
 def _stored(store: ResultsStore, name: str) -> bool:

@@ -19,7 +19,7 @@ import queue
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Callable, Mapping
 
 import pandas as pd
 from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS
@@ -45,7 +45,8 @@ class ReportInputs:
 
     Attributes:
         runs: results rows (columns of ``bench.schema``).
-        studies: study name (``bench.studies.STUDIES``) → its table; missing names leave their section out.
+        studies: study name (``bench.studies.STUDIES``) → its table; missing names leave their section out. A
+            ``bench.studies.StudyTables`` may still be computing them: only the studies' sections look them up.
         adequacy: rows of the ``adequacy`` table (scene, model, simpler_model, precession_rate_diff,
             trajectory_gap, note), possibly empty.
         provenance: label → value lines shown at the top (matrix id, host, commit, ...).
@@ -60,7 +61,7 @@ class ReportInputs:
     """
 
     runs: pd.DataFrame
-    studies: dict[str, pd.DataFrame] = field(default_factory=dict)
+    studies: Mapping[str, pd.DataFrame] = field(default_factory=dict)
     adequacy: pd.DataFrame = field(default_factory=pd.DataFrame)
     provenance: dict[str, str] = field(default_factory=dict)
     include_seed: bool = True

@@ -209,6 +209,28 @@ def test_ensure_studies_computes_missing_tables_once_and_reads_them_back() -> No
         pd.testing.assert_frame_equal(in_workers[name], table)
 
 
+def test_the_parts_of_a_split_study_make_up_its_table_row_for_row() -> None:
+    """A study computed in parts (``Study.split``, in worker processes) has the table it has computed whole, bit
+    for bit: configs of several parts each (a failing run among them), for every study that has parts."""
+    several = {
+        "study_long_time_energy": LongTimeEnergyConfig(model="linear", duration_s=60.0, n_out=31,
+                                                       runs=(("verlet", 0.2), ("dopri5", 1e-6), ("not_registered", 0.1),
+                                                             ("explicit_euler", 0.5))),
+        "study_stability": StabilitySweepConfig(steps=20, kh=(0.5, 2.5)),  # every fixed-step integrator
+        "study_precession_latitude": PrecessionLatitudeConfig(duration_s=120.0, n_latitudes=3),
+        "study_release_azimuth": ReleaseAzimuthConfig(latitudes_deg=(40.44, -0.18, 90.0), azimuths_deg=(0.0, 90.0),
+                                                      duration_s=60.0, integrators=("verlet", "implicit_midpoint")),
+        "study_long_time_roundoff": RoundoffConfig(integrators=("verlet", "yoshida4", "gauss_legendre4"),
+                                                   max_decade=4, releases=2),
+    }
+    split = {name for name, study in STUDIES.items() if study.parts is not None}
+    assert split and all(len(STUDIES[name].split(several[name])) >= 3 for name in split)
+    whole = ensure_studies(None, configs=several, progress=False)
+    in_parts = ensure_studies(None, configs=several, progress=False, jobs=2)
+    for name in STUDIES:
+        pd.testing.assert_frame_equal(in_parts[name], whole[name], check_exact=True)
+
+
 def test_a_stored_study_of_another_version_is_recomputed() -> None:
     """A table stored before the release-azimuth study kept the step taken (no ``study_version`` column: version
     1) is not shown as the current study: it is recomputed, and the new table says its version."""

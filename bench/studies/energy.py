@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -76,6 +76,12 @@ def long_time_energy(config: LongTimeEnergyConfig = LongTimeEnergyConfig(), prog
         }))
     frame = pd.concat(frames, ignore_index=True)
     return with_config_columns(frame, config, exclude=("runs",))
+
+
+def long_time_energy_parts(config: LongTimeEnergyConfig) -> list[LongTimeEnergyConfig]:
+    """One config per run of ``config.chosen_runs()``: their tables, one after another, are ``config``'s (each run
+    is its own rows, and ``runs`` is not a column)."""
+    return [replace(config, runs=(run,)) for run in config.chosen_runs()]
 
 
 BOUNDED_BELOW_EXPONENT = 0.25

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, cast
 
 import numpy as np
@@ -170,3 +170,9 @@ def roundoff_growth(config: RoundoffConfig = RoundoffConfig(), progress: bool = 
                   "drift_min": per_release[:, i].min(), "drift_max": per_release[:, i].max(),
                   "exponent": exponent, "constant": constant} for i, d in enumerate(decades)]
     return with_config_columns(pd.DataFrame(rows), config, exclude=("integrators", "kh", "compensated"))
+
+
+def roundoff_growth_parts(config: RoundoffConfig) -> list[RoundoffConfig]:
+    """One config per integrator of ``config.integrators``: their tables, one after another, are ``config``'s (each
+    integrator is its own rows, from the same seeded releases, and ``integrators`` is not a column)."""
+    return [replace(config, integrators=(name,)) for name in config.integrators]

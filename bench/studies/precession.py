@@ -11,7 +11,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -169,6 +169,12 @@ def precession_vs_release_azimuth(config: ReleaseAzimuthConfig = ReleaseAzimuthC
             })
     return with_config_columns(pd.DataFrame(rows), config,
                                 exclude=("latitudes_deg", "azimuths_deg", "integrators", "kh"))
+
+
+def release_azimuth_parts(config: ReleaseAzimuthConfig) -> list[ReleaseAzimuthConfig]:
+    """One config per latitude of ``config.latitudes_deg``: their tables, one after another, are ``config``'s (the
+    rows go latitude by latitude, and ``latitudes_deg`` is not a column)."""
+    return [replace(config, latitudes_deg=(latitude,)) for latitude in config.latitudes_deg]
 
 
 MIDPOINT_INTEGRATOR = "implicit_midpoint"

@@ -4,7 +4,7 @@ rotation destabilises a method (symplectic Euler) beside its theory."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import cast
 
 import numpy as np
@@ -26,7 +26,7 @@ from foucault_bench.bench.studies.common import (
 
 @dataclass(frozen=True)
 class StabilitySweepConfig:
-    """Every registered fixed-step integrator on the linear model at each k·h of ``kh``, without Earth's rotation
+    """Each fixed-step integrator of ``integrators`` (``None``: every registered one) on the linear model at each k·h of ``kh``, without Earth's rotation
     (Ω_E = 0: the undamped oscillator that defines ``stability_limit_kh``) and with it (Ω_E sidereal at
     ``latitude_deg``).
 
@@ -42,6 +42,13 @@ class StabilitySweepConfig:
     steps: int = 20_000
     kh: tuple[float, ...] = (0.01, 0.02, 0.05, *np.round(np.linspace(0.1, 4.0, 40), 6), 4.5, 5.0, 5.5, 6.0, 6.5)
     limit_resolution_kh: float = 1e-4
+    integrators: tuple[str, ...] | None = None
+
+    def chosen_integrators(self) -> tuple[str, ...]:
+        """``integrators``, or every registered fixed-step integrator, by name."""
+        if self.integrators is not None:
+            return self.integrators
+        return tuple(sorted(name for name, integrator in REGISTRY.items() if not integrator.adaptive))
 
 
 def stability_sweep(config: StabilitySweepConfig = StabilitySweepConfig(), progress: bool = True) -> pd.DataFrame:
@@ -56,8 +63,7 @@ def stability_sweep(config: StabilitySweepConfig = StabilitySweepConfig(), progr
     status, message, plus the config's scalars.
     """
     model = get_model(config.model)
-    fixed_step = sorted(name for name, integrator in REGISTRY.items() if not integrator.adaptive)
-    cases = [(name, rotation) for name in fixed_step for rotation in (False, True)]
+    cases = [(name, rotation) for name in config.chosen_integrators() for rotation in (False, True)]
     rows = []
     for name, rotation in progress_over(cases, "stability sweep", progress):
         integrator = cast(FixedStepIntegrator, REGISTRY[name])  # not adaptive: the one-step map's interface
@@ -87,4 +93,10 @@ def stability_sweep(config: StabilitySweepConfig = StabilitySweepConfig(), progr
                 "status": solution.status,
                 "message": solution.message,
             })
-    return with_config_columns(pd.DataFrame(rows), config, exclude=("kh",))
+    return with_config_columns(pd.DataFrame(rows), config, exclude=("kh", "integrators"))
+
+
+def stability_sweep_parts(config: StabilitySweepConfig) -> list[StabilitySweepConfig]:
+    """One config per integrator of ``config.chosen_integrators()``: their tables, one after another, are
+    ``config``'s (each integrator is its own rows, and ``integrators`` is not a column)."""
+    return [replace(config, integrators=(name,)) for name in config.chosen_integrators()]

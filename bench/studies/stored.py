@@ -1,34 +1,48 @@
 """The stored studies: ``STUDIES`` maps a study's name (also the name of its table in the results database) to
-its function and default config; ``ensure_studies`` reads the stored tables and computes the missing ones."""
+its function and default config; ``StudyTables`` reads the stored tables and computes the missing ones (in worker
+processes while its caller goes on), ``ensure_studies`` waits for them all."""
 
 from __future__ import annotations
 
 import multiprocessing
+import multiprocessing.pool
+from collections import Counter
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Callable, Iterator, Protocol
+from typing import Any, Callable, Iterator, Protocol
 
 import pandas as pd
 from tqdm import tqdm
 
 from foucault_bench.bench.parent_death import worker_pool
-from foucault_bench.bench.studies.energy import LongTimeEnergyConfig, long_time_energy
-from foucault_bench.bench.studies.long_time_roundoff import RoundoffConfig, roundoff_growth
+from foucault_bench.bench.studies.energy import LongTimeEnergyConfig, long_time_energy, long_time_energy_parts
+from foucault_bench.bench.studies.long_time_roundoff import RoundoffConfig, roundoff_growth, roundoff_growth_parts
 from foucault_bench.bench.studies.precession import (
     PrecessionLatitudeConfig, ReleaseAzimuthConfig, precession_vs_latitude, precession_vs_release_azimuth,
+    release_azimuth_parts,
 )
-from foucault_bench.bench.studies.stability import StabilitySweepConfig, stability_sweep
+from foucault_bench.bench.studies.stability import StabilitySweepConfig, stability_sweep, stability_sweep_parts
 
 
 @dataclass(frozen=True)
 class Study:
     """A study stored as a table named ``name`` in the results database. ``version`` counts the changes to what
     its table holds (a stored table carries it in column ``study_version``; a table without it is version 1):
-    a stored table of another version is recomputed, never shown as if it were the current study's."""
+    a stored table of another version is recomputed, never shown as if it were the current study's.
+
+    ``parts`` (optional) splits a config into smaller configs whose tables, concatenated in order, are the whole
+    config's table row for row and bit for bit (``tests/test_studies.py`` checks it for every study that has
+    one): the pieces that ``ensure_studies`` hands to its worker processes, so that two workers share a study."""
 
     name: str
     compute: Callable[..., pd.DataFrame]
     config: object
     version: int = 1
+    parts: Callable[[Any], list[Any]] | None = None
+
+    def split(self, config: object) -> list[object]:
+        """``parts(config)``, or ``[config]`` for a study that is computed whole."""
+        return [config] if self.parts is None else self.parts(config)
 
 
 STUDY_VERSION_COLUMN = "study_version"
@@ -36,15 +50,21 @@ STUDY_VERSION_COLUMN = "study_version"
 STUDIES: dict[str, Study] = {
     study.name: study
     for study in (
-        # version 2: one representative per family from the declared facts, one tolerance for the adaptive ones
-        Study("study_long_time_energy", long_time_energy, LongTimeEnergyConfig(), version=2),
-        # version 2: the k·h grid goes on to 6.5, so that every declared limit (composition10: 5.97) lies inside it
-        Study("study_stability", stability_sweep, StabilitySweepConfig(), version=2),
-        Study("study_precession_latitude", precession_vs_latitude, PrecessionLatitudeConfig()),
-        # version 2: kh is the step taken (kh_requested the configured one); no rk4
-        Study("study_release_azimuth", precession_vs_release_azimuth, ReleaseAzimuthConfig(), version=2),
+        # In the order the worker processes of ``StudyTables`` take the studies' parts: the longest study first, so
+        # that the last part to end is a short one (CPU of each default config, one process, 2-core AMD EPYC,
+        # 2026-12-05: round-off 8.0 s, stability 4.4 s or 7.9 s compiling from cold, release azimuth 2.3 s,
+        # energy 1.3 s, latitude 0.6 s; the longest single part is composition10's round-off, 3.7 s).
         # version 2: composition8 and composition10 too
-        Study("study_long_time_roundoff", roundoff_growth, RoundoffConfig(), version=2),
+        Study("study_long_time_roundoff", roundoff_growth, RoundoffConfig(), version=2, parts=roundoff_growth_parts),
+        # version 2: the k·h grid goes on to 6.5, so that every declared limit (composition10: 5.97) lies inside it
+        Study("study_stability", stability_sweep, StabilitySweepConfig(), version=2, parts=stability_sweep_parts),
+        # version 2: kh is the step taken (kh_requested the configured one); no rk4
+        Study("study_release_azimuth", precession_vs_release_azimuth, ReleaseAzimuthConfig(), version=2,
+              parts=release_azimuth_parts),
+        # version 2: one representative per family from the declared facts, one tolerance for the adaptive ones
+        Study("study_long_time_energy", long_time_energy, LongTimeEnergyConfig(), version=2,
+              parts=long_time_energy_parts),
+        Study("study_precession_latitude", precession_vs_latitude, PrecessionLatitudeConfig()),
     )
 }
 
@@ -68,50 +88,100 @@ class TableStore(Protocol):
 
 def ensure_studies(store: TableStore | None, recompute: bool = False, configs: dict[str, object] | None = None,
                    progress: bool = True, store_computed: bool = True, jobs: int = 1) -> dict[str, pd.DataFrame]:
-    """Every study's table: read from ``store`` (``read_table``) or, when missing, of another ``Study.version``
-    or ``recompute``, computed with its config (``configs`` overrides the defaults by study name) and written
-    back (``write_table``) unless ``store_computed`` is false (a read-only database). ``store`` may be None:
-    everything is computed and nothing is written. ``jobs`` > 1 computes the missing studies side by side in
-    that many worker processes (forked where the platform can; each study's table is the same either way: a
-    study is a deterministic computation of its config), with one progress bar over the studies."""
-    configs = configs or {}
-    tables: dict[str, pd.DataFrame] = {}
-    for name, study in STUDIES.items():
-        if store is not None and not recompute:
-            try:
-                stored = store.read_table(name)
-            except KeyError:
-                continue
-            if not stored.empty and stored_version(stored) == study.version:
-                tables[name] = stored
-    missing = [name for name in STUDIES if name not in tables]
-    for name, table in _computed(missing, configs, progress, jobs):
+    """Every study's table (``StudyTables``, waited for): read from ``store`` or computed, and stored."""
+    with StudyTables(store, recompute, configs, progress, store_computed, jobs) as tables:
+        return dict(tables)
+
+
+class StudyTables(Mapping[str, pd.DataFrame]):
+    """Every study's table by name, in ``STUDIES`` order: read from ``store`` (``read_table``) or, when missing, of
+    another ``Study.version`` or ``recompute``, computed with its config (``configs`` overrides the defaults by
+    study name) and written back (``write_table``) unless ``store_computed`` is false (a read-only database).
+    ``store`` may be None: everything is computed and nothing is written.
+
+    With ``jobs`` < 2 the missing studies are computed here and now, each with its own progress bar. With more,
+    their parts (``Study.split``) go at once to that many worker processes (forked where the platform can), and
+    the caller goes on with other work meanwhile: looking a table up waits for its parts (with a progress bar
+    over the parts while it waits) and stores each study that is complete by then. A study's table is the same
+    either way: a study is a deterministic computation of its config, and its parts' tables make up its own.
+    Leaving the ``with`` block (or ``close``) stops the workers, so that a failed report leaves none behind."""
+
+    def __init__(self, store: TableStore | None, recompute: bool = False, configs: dict[str, object] | None = None,
+                 progress: bool = True, store_computed: bool = True, jobs: int = 1) -> None:
+        configs = configs or {}
+        self._store = store if store_computed else None
+        self._progress = progress
+        self._tables: dict[str, pd.DataFrame] = {}
+        for name, study in STUDIES.items():
+            if store is not None and not recompute:
+                try:
+                    stored = store.read_table(name)
+                except KeyError:
+                    continue
+                if not stored.empty and stored_version(stored) == study.version:
+                    self._tables[name] = stored
+        missing = [(name, configs.get(name, STUDIES[name].config)) for name in STUDIES if name not in self._tables]
+        tasks = [(name, index, part) for name, config in missing for index, part in enumerate(STUDIES[name].split(config))]
+        self._pieces: dict[str, dict[int, pd.DataFrame]] = {name: {} for name, _ in missing}
+        self._counts = Counter(name for name, _, _ in tasks)
+        self._total, self._done = len(tasks), 0
+        self._pool: multiprocessing.pool.Pool | None = None
+        self._results: Iterator[tuple[str, int, pd.DataFrame]] = iter(())
+        if jobs < 2 or len(tasks) < 2 or "fork" not in multiprocessing.get_all_start_methods():
+            for name, config in missing:
+                self._add(name, STUDIES[name].compute(config, progress=progress))
+            return
+        self._pool = worker_pool(multiprocessing.get_context("fork"), min(jobs, len(tasks)))
+        self._results = self._pool.imap_unordered(_compute_part, tasks)  # in the order they end
+
+    def __getitem__(self, name: str) -> pd.DataFrame:
+        if name not in STUDIES:
+            raise KeyError(name)
+        if name not in self._tables:
+            self._wait_for(name)
+        return self._tables[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(STUDIES)
+
+    def __len__(self) -> int:
+        return len(STUDIES)
+
+    def __enter__(self) -> StudyTables:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Stop the worker processes (tables not yet computed stay missing)."""
+        if self._pool is not None:
+            self._pool.terminate()
+            self._pool = None
+
+    def _add(self, name: str, table: pd.DataFrame) -> None:
         table[STUDY_VERSION_COLUMN] = STUDIES[name].version
-        if store is not None and store_computed:
-            store.write_table(name, table)
-        tables[name] = table
-    return {name: tables[name] for name in STUDIES}
+        if self._store is not None:
+            self._store.write_table(name, table)
+        self._tables[name] = table
+
+    def _wait_for(self, name: str) -> None:
+        if self._pool is None:
+            raise RuntimeError(f"study {name} was not computed: its worker processes were stopped")
+        with tqdm(total=self._total, initial=self._done, desc="studies", unit="part", disable=not self._progress,
+                  leave=False) as bar:
+            while name not in self._tables:
+                study, index, table = next(self._results)
+                self._done += 1
+                bar.update()
+                pieces = self._pieces[study]
+                pieces[index] = table
+                if len(pieces) == self._counts[study]:
+                    self._add(study, pd.concat([pieces[i] for i in range(len(pieces))], ignore_index=True))
+        if self._done == self._total:
+            self.close()
 
 
-def _compute(name: str, config: object, progress: bool) -> tuple[str, pd.DataFrame]:
-    return name, STUDIES[name].compute(config, progress=progress)
-
-
-def _compute_quietly(task: tuple[str, object]) -> tuple[str, pd.DataFrame]:
-    return _compute(*task, progress=False)
-
-
-def _computed(names: list[str], configs: dict[str, object], progress: bool,
-              jobs: int) -> Iterator[tuple[str, pd.DataFrame]]:
-    """(name, table) of the studies ``names``, in this process (each with its own progress bar) or, with
-    ``jobs`` > 1 and several of them, in a pool of worker processes (one bar counting the studies done)."""
-    tasks = [(name, configs.get(name, STUDIES[name].config)) for name in names]
-    if jobs < 2 or len(tasks) < 2 or "fork" not in multiprocessing.get_all_start_methods():
-        for name, config in tasks:
-            yield _compute(name, config, progress)
-        return
-    with worker_pool(multiprocessing.get_context("fork"), min(jobs, len(tasks))) as pool, \
-            tqdm(total=len(tasks), desc="studies", unit="study", disable=not progress, leave=False) as bar:
-        for name, table in pool.imap_unordered(_compute_quietly, tasks):  # as each study ends
-            bar.update()
-            yield name, table
+def _compute_part(task: tuple[str, int, object]) -> tuple[str, int, pd.DataFrame]:
+    name, index, config = task
+    return name, index, STUDIES[name].compute(config, progress=False)
