@@ -111,9 +111,13 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
     The report is built in a staging folder beside ``out`` and swapped in whole once complete
     (``bench.atomic.replacing_folder``; the command checks ``out`` first): a kill or a full disk leaves the
     previous report. Study tables are computed and stored when missing (all of them with ``recompute``); when
-    ``db`` cannot be written they are computed for this report only, with a note saying so."""
+    ``db`` cannot be written they are computed for this report only, with a note saying so.
+
+    pandas keeps the report's text columns as Python strings (``mode.string_storage``; pyarrow's, the default,
+    give the same values): the report selects from small frames thousands of times, which takes pyarrow's strings
+    20-25 % longer (bench/PERF.md "The first report")."""
     started = time.perf_counter()
-    with ResultsStore(db, create=False) as store:
+    with pd.option_context("mode.string_storage", "python"), ResultsStore(db, create=False) as store:
         matrix_id = store.resolve_matrix_id(matrix_id)
         runs = store.frame(matrix_id)
         if runs.empty:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import multiprocessing
 import multiprocessing.pool
+import queue
 from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -100,9 +101,9 @@ class StudyTables(Mapping[str, pd.DataFrame]):
     ``store`` may be None: everything is computed and nothing is written.
 
     With ``jobs`` < 2 the missing studies are computed here and now, each with its own progress bar. With more,
-    their parts (``Study.split``) go at once to that many worker processes (forked where the platform can), and
-    the caller goes on with other work meanwhile: looking a table up waits for its parts (with a progress bar
-    over the parts while it waits) and stores each study that is complete by then. A study's table is the same
+    their parts (``Study.split``) go at once to that many worker processes (forked where the platform can), with
+    one progress bar counting the parts as they end, and the caller goes on with other work meanwhile: looking a
+    table up waits for its parts and stores each study that is complete by then. A study's table is the same
     either way: a study is a deterministic computation of its config, and its parts' tables make up its own.
     Leaving the ``with`` block (or ``close``) stops the workers, so that a failed report leaves none behind."""
 
@@ -126,13 +127,16 @@ class StudyTables(Mapping[str, pd.DataFrame]):
         self._counts = Counter(name for name, _, _ in tasks)
         self._total, self._done = len(tasks), 0
         self._pool: multiprocessing.pool.Pool | None = None
-        self._results: Iterator[tuple[str, int, pd.DataFrame]] = iter(())
+        self._arrived: queue.SimpleQueue[tuple[str, int, pd.DataFrame] | BaseException] = queue.SimpleQueue()
+        self._bar: tqdm | None = None
         if jobs < 2 or len(tasks) < 2 or "fork" not in multiprocessing.get_all_start_methods():
             for name, config in missing:
                 self._add(name, STUDIES[name].compute(config, progress=progress))
             return
         self._pool = worker_pool(multiprocessing.get_context("fork"), min(jobs, len(tasks)))
-        self._results = self._pool.imap_unordered(_compute_part, tasks)  # in the order they end
+        self._bar = tqdm(total=len(tasks), desc="studies", unit="part", disable=not progress, leave=False)
+        for task in tasks:  # taken in this order by the workers as they come free
+            self._pool.apply_async(_compute_part, (task,), callback=self._arrive, error_callback=self._arrived.put)
 
     def __getitem__(self, name: str) -> pd.DataFrame:
         if name not in STUDIES:
@@ -158,6 +162,15 @@ class StudyTables(Mapping[str, pd.DataFrame]):
         if self._pool is not None:
             self._pool.terminate()
             self._pool = None
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
+
+    def _arrive(self, part: tuple[str, int, pd.DataFrame]) -> None:
+        """A part's table, in the pool's thread that receives results: counted on the bar, queued for this one."""
+        if self._bar is not None:
+            self._bar.update()
+        self._arrived.put(part)
 
     def _add(self, name: str, table: pd.DataFrame) -> None:
         table[STUDY_VERSION_COLUMN] = STUDIES[name].version
@@ -168,16 +181,16 @@ class StudyTables(Mapping[str, pd.DataFrame]):
     def _wait_for(self, name: str) -> None:
         if self._pool is None:
             raise RuntimeError(f"study {name} was not computed: its worker processes were stopped")
-        with tqdm(total=self._total, initial=self._done, desc="studies", unit="part", disable=not self._progress,
-                  leave=False) as bar:
-            while name not in self._tables:
-                study, index, table = next(self._results)
-                self._done += 1
-                bar.update()
-                pieces = self._pieces[study]
-                pieces[index] = table
-                if len(pieces) == self._counts[study]:
-                    self._add(study, pd.concat([pieces[i] for i in range(len(pieces))], ignore_index=True))
+        while name not in self._tables:
+            arrived = self._arrived.get()
+            if isinstance(arrived, BaseException):
+                raise arrived
+            study, index, table = arrived
+            self._done += 1
+            pieces = self._pieces[study]
+            pieces[index] = table
+            if len(pieces) == self._counts[study]:
+                self._add(study, pd.concat([pieces[i] for i in range(len(pieces))], ignore_index=True))
         if self._done == self._total:
             self.close()
 
