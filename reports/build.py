@@ -114,8 +114,8 @@ def write_report(db: Path, matrix_id: str | None, out: Path, studies: str = "sto
     ``db`` cannot be written they are computed for this report only, with a note saying so.
 
     pandas keeps the report's text columns as Python strings (``mode.string_storage``; pyarrow's, the default,
-    give the same values): the report selects from small frames thousands of times, which takes pyarrow's strings
-    20-25 % longer (bench/PERF.md "The first report")."""
+    hold the same values): the report selects rows from small frames thousands of times, which costs 24-31 % more
+    CPU with pyarrow's strings (bench/PERF.md "The first report: the studies in parts")."""
     started = time.perf_counter()
     with pd.option_context("mode.string_storage", "python"), ResultsStore(db, create=False) as store:
         matrix_id = store.resolve_matrix_id(matrix_id)

@@ -104,3 +104,24 @@ def test_one_process_and_worker_processes_write_the_same_report(fixture_database
     assert len(expected) > 20
     for name in expected:
         assert (folders[1] / name).read_bytes() == (folders[2] / name).read_bytes(), name
+
+
+def test_python_and_pyarrow_strings_write_the_same_report(fixture_database: Path, tmp_path: Path) -> None:
+    """``foucault-bench report`` reads the results with pandas' text columns as Python strings (``write_report``:
+    ``mode.string_storage``, for speed); pyarrow's strings, pandas' default, hold the same values. The whole fixture
+    (every scene, inline and ensemble ones, failed and diverged runs, texts with ``|``, ``<`` and ``&``) built from
+    each, nothing reused, writes every page, ``REPORT.md`` and table file the same byte for byte."""
+    folders = {}
+    for storage in ("pyarrow", "python"):
+        with pd.option_context("mode.string_storage", storage):
+            inputs = _inputs(fixture_database)
+            assert inputs.runs["integrator"].array.dtype.storage == storage
+            inputs.jobs, inputs.static = 2, False
+            folders[storage] = tmp_path / storage
+            build_report(inputs, folders[storage], previous=tmp_path / "none")
+    tables = sorted(path.relative_to(folders["python"]) for path in (folders["python"] / "tables").iterdir())
+    expected = [*(page.relative_to(folders["python"]) for page in report_pages(folders["python"])), Path("REPORT.md"),
+                *tables]
+    assert len(expected) > 20
+    for name in expected:
+        assert (folders["pyarrow"] / name).read_bytes() == (folders["python"] / name).read_bytes(), name
