@@ -26,9 +26,9 @@ from foucault_bench.bench.studies.common import (
 
 @dataclass(frozen=True)
 class StabilitySweepConfig:
-    """Each fixed-step integrator of ``integrators`` (``None``: every registered one) on the linear model at each k·h of ``kh``, without Earth's rotation
-    (Ω_E = 0: the undamped oscillator that defines ``stability_limit_kh``) and with it (Ω_E sidereal at
-    ``latitude_deg``).
+    """Each fixed-step integrator of ``integrators`` (``None``: every registered one) on the linear model at each
+    k·h of ``kh``, without Earth's rotation (Ω_E = 0: the undamped oscillator that defines ``stability_limit_kh``)
+    and with it (Ω_E sidereal at ``latitude_deg``).
 
     Two measurements per point: a long run of ``steps`` steps (its max energy error and whether it diverged),
     and the growth per step of the scheme's own one-step map (``bench.verdicts.stability``), from which the

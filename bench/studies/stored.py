@@ -33,7 +33,7 @@ class Study:
 
     ``parts`` (optional) splits a config into smaller configs whose tables, concatenated in order, are the whole
     config's table row for row and bit for bit (``tests/test_studies.py`` checks it for every study that has
-    one): the pieces that ``ensure_studies`` hands to its worker processes, so that two workers share a study."""
+    one): the pieces that ``StudyTables`` hands to its worker processes, so that two workers share a study."""
 
     name: str
     compute: Callable[..., pd.DataFrame]
@@ -122,7 +122,8 @@ class StudyTables(Mapping[str, pd.DataFrame]):
                 if not stored.empty and stored_version(stored) == study.version:
                     self._tables[name] = stored
         missing = [(name, configs.get(name, STUDIES[name].config)) for name in STUDIES if name not in self._tables]
-        tasks = [(name, index, part) for name, config in missing for index, part in enumerate(STUDIES[name].split(config))]
+        tasks = [(name, index, part)
+                 for name, config in missing for index, part in enumerate(STUDIES[name].split(config))]
         self._pieces: dict[str, dict[int, pd.DataFrame]] = {name: {} for name, _ in missing}
         self._counts = Counter(name for name, _, _ in tasks)
         self._total, self._done = len(tasks), 0
