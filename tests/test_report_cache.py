@@ -109,7 +109,7 @@ def test_one_process_and_worker_processes_write_the_same_report(fixture_database
 def test_python_and_pyarrow_strings_write_the_same_report(fixture_database: Path, tmp_path: Path) -> None:
     """``foucault-bench report`` reads the results with pandas' text columns as Python strings (``write_report``:
     ``mode.string_storage``, for speed); pyarrow's strings, pandas' default, hold the same values. The whole fixture
-    (every scene, inline and ensemble ones, failed and diverged runs, texts with ``|``, ``<`` and ``&``) built from
+    (four scenes of three models, one inline, failed and diverged runs, texts with ``|``, ``<`` and ``&``) built from
     each, nothing reused, writes every page, ``REPORT.md`` and table file the same byte for byte."""
     folders = {}
     for storage in ("pyarrow", "python"):
