@@ -231,6 +231,27 @@ def test_the_parts_of_a_split_study_make_up_its_table_row_for_row() -> None:
         pd.testing.assert_frame_equal(in_parts[name], whole[name], check_exact=True)
 
 
+def test_a_failing_part_raises_at_its_lookup_and_leaves_no_worker_behind(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A part that raises in a worker process raises where its study's table is looked up, and leaving
+    ``StudyTables`` stops its workers (a failed report leaves no process behind)."""
+    import multiprocessing
+
+    from foucault_bench.bench.studies import Study, StudyTables, stored
+
+    def compute(config: object, progress: bool) -> pd.DataFrame:
+        if config == "bad":
+            raise ValueError("the part 'bad' failed")
+        return pd.DataFrame({"part": [config]})
+
+    split = Study("study_in_parts", compute, ("good", "bad", "also good"), parts=list)
+    monkeypatch.setattr(stored, "STUDIES", {split.name: split})  # the forked workers see it too
+    before = set(multiprocessing.active_children())
+    with pytest.raises(ValueError, match="the part 'bad' failed"):
+        with StudyTables(None, progress=False, jobs=2) as tables:
+            tables["study_in_parts"]
+    assert set(multiprocessing.active_children()) <= before
+
+
 def test_a_stored_study_of_another_version_is_recomputed() -> None:
     """A table stored before the release-azimuth study kept the step taken (no ``study_version`` column: version
     1) is not shown as the current study: it is recomputed, and the new table says its version."""
