@@ -49,7 +49,6 @@ from foucault_bench.reports.html_page import write_pages
 Section = Callable[[Builder, ReportInputs], None]
 
 SECTIONS: list[Section] = [
-    study_sections.start_seed,  # adds no blocks: starts the seed section's work, which seed_section places
     result_sections.recommendations,
     result_sections.overview,
     result_sections.decisions,

@@ -5,9 +5,7 @@ page per scene, the studies, all runs), ``add`` appends headings and paragraphs,
 queues the writing of its files, ``figure`` and ``curves`` keep a place for a chart. The queued work (charts and
 table files) is done by worker processes while the sections go on: after each section ``flush`` hands what was
 queued to one worker (the sections use the other core), and ``draw_figures`` does the rest on ``jobs`` workers
-once every section has run. Long work that needs nothing from the sections is handed out before them (``start``)
-and its blocks placed by the section that shows them (``place``): queued at its place, it would end the build
-alone on one core. Blocks land in the page's order whatever order they finish in; a progress bar names
+once every section has run. Blocks land in the page's order whatever order they finish in; a progress bar names
 each item done. A figure whose inputs did not change since the previous build of the same folder is not drawn
 again (``reports.figure_cache``): its blocks and static files are taken from that build.
 """
@@ -118,8 +116,7 @@ def _fork_context() -> multiprocessing.context.BaseContext | None:
 @dataclass
 class _Pending:
     """Queued work: ``draw()`` returns the blocks for a place kept on ``page`` at index ``place`` (a chart), or
-    writes files and returns nothing (``page`` None: a table's files, or ``start``ed work not yet placed);
-    ``what`` names it in the progress bar,
+    writes files and returns nothing (``page`` None: a table's files); ``what`` names it in the progress bar,
     ``key`` is the digest of its inputs (``figure_cache.digest``; ``None``: always done)."""
 
     page: Page | None
@@ -154,7 +151,6 @@ class Builder:
         self._pools: list[multiprocessing.pool.Pool] = []
         self._background: multiprocessing.pool.Pool | None = None  # the one-worker pool of the last flush
         self._unfinished = 0  # tasks handed to the background pool and not yet finished (no flush until 0)
-        self._started: dict[str, _Pending] = {}  # work handed out by ``start``, by name, until ``place``d
 
     def page(self, file: str, title: str) -> Page:
         """Make page ``file`` (created with ``title`` on first use) the one blocks are added to; return it."""
@@ -173,38 +169,12 @@ class Builder:
         ``what`` names them in the progress bar; ``long`` starts them first; ``key``: everything the blocks
         depend on (hashed with the drawing code's version), or ``None`` to draw them on every build (as when
         ``key`` holds a lambda or a closure, whose captured data the hash cannot see)."""
-        self.pending.append(_Pending(self.current, len(self.current.blocks), what, draw, self._digest(what, key),
-                                     long))
-        self.current.blocks.append(Paragraph(""))
-
-    def start(self, what: str, draw: Callable[[], list[Block]], key: object = None) -> None:
-        """Queue ``draw`` (as ``later`` does) and hand it now to a worker of its own, beside the one ``flush`` uses,
-        to be done while the sections are built; its blocks go where ``place(what)`` is called (``draw_figures``
-        raises if it never is). With one job, or without the fork start method, ``draw_figures`` does it."""
-        task = _Pending(None, 0, what, draw, self._digest(what, key), long=True)
-        self.pending.append(task)
-        self._started[what] = task
-        context = _fork_context()
-        if self.jobs < 2 or context is None:
-            return
-        tasks = self._take_queued()
-        if tasks:
-            pool = worker_pool(context, 1)
-            self._pools.append(pool)
-            self._submit(pool, tasks)
-            pool.close()  # its worker ends with its tasks
-
-    def place(self, what: str) -> None:
-        """Keep the place on the current page for the blocks of the work ``start``ed as ``what``."""
-        task = self._started.pop(what)
-        task.page, task.place = self.current, len(self.current.blocks)
-        self.current.blocks.append(Paragraph(""))
-
-    def _digest(self, what: str, key: object) -> str | None:
         try:
-            return None if key is None else digest((what, key), self.folder)
+            found = None if key is None else digest((what, key), self.folder)
         except Unhashable:
-            return None
+            found = None
+        self.pending.append(_Pending(self.current, len(self.current.blocks), what, draw, found, long))
+        self.current.blocks.append(Paragraph(""))
 
     def figure(self, name: str, caption: str, draw: Callable[[Path], Path],
                draw_interactive: Callable[[], Plot] | None = None, beside: bool = False) -> None:
@@ -290,9 +260,6 @@ class Builder:
         processes when there are several, and wait for all of it, with a bar that knows the total (and so shows
         an ETA) and names the item last done; blocks keep their order. Writes the cache of this build
         (``figure_cache``)."""
-        if self._started:
-            self.close()
-            raise RuntimeError(f"work started but never placed: {', '.join(self._started)}")
         try:
             self._finish()
         finally:
@@ -305,7 +272,7 @@ class Builder:
         self.cache.write({task.key: task.blocks for task in charts if task.key is not None},
                          drawn=[task.what for task in charts if id(task) in drawn],
                          reused=[task.what for task in charts if id(task) not in drawn])
-        self.pending, self._todo, self._queued, self._started = [], [], 0, {}
+        self.pending, self._todo, self._queued = [], [], 0
 
     def close(self) -> None:
         """Stop the worker processes and forget the queued work (after ``draw_figures``, or when a section

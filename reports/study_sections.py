@@ -191,19 +191,8 @@ def studies(builder: Builder, inputs: ReportInputs) -> None:
                        study_charts.release_azimuth, azimuth)
 
 
-SEED_WORK = "seed section"
-
-
-def start_seed(builder: Builder, inputs: ReportInputs) -> None:
-    """The seed section's work (``reports.seed``: the seed study computed, its figures drawn), handed to a worker
-    before the other sections are built: it needs none of their data, and queued at its place near the end it
-    would end the report alone on one core (5-7 s, numba compiling its loops on a new machine)."""
-    if inputs.include_seed:
-        builder.start(SEED_WORK, partial(seed_blocks, builder.folder, "seed"), key="seed")
-
-
 def seed_section(builder: Builder, inputs: ReportInputs) -> None:
-    """The seed note revisited, on the studies page: the blocks of the work ``start_seed`` started."""
+    """The seed note revisited, on the studies page (its figures computed and drawn by ``reports.seed``)."""
     if inputs.include_seed:
         builder.page(STUDIES_PAGE, "studies")
-        builder.place(SEED_WORK)
+        builder.later("seed section", partial(seed_blocks, builder.folder, "seed"), long=True, key="seed")

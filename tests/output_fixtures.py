@@ -21,8 +21,7 @@ import matplotlib
 matplotlib.rcParams["svg.hashsalt"] = "fixed"  # with SOURCE_DATE_EPOCH: the same SVG bytes every build
 import foucault_bench.reports.build as build
 from foucault_bench.reports import result_sections, study_sections
-build.SECTIONS.remove(study_sections.start_seed)  # the seed section is tested in test_seed.py
-build.SECTIONS.remove(study_sections.seed_section)
+build.SECTIONS.remove(study_sections.seed_section)  # the seed section is tested in test_seed.py
 result_sections._scene_work_precision = lambda *arguments: None  # one figure (convergence) is enough to test
 build.SECTIONS.remove(result_sections.recommendations)  # the writing (its charts are work-precision charts)
 {extra}

@@ -72,8 +72,7 @@ def place(tmp_path_factory):
     old = folder / "old"
     patch = pytest.MonkeyPatch()
     patch.setattr(build, "SECTIONS", [section for section in build.SECTIONS
-                                      if section not in (study_sections.start_seed, study_sections.seed_section,
-                                                         result_sections.recommendations)])
+                                      if section not in (study_sections.seed_section, result_sections.recommendations)])
     patch.setattr(result_sections, "_scene_work_precision", lambda *arguments: None)
     try:
         assert cli_main(["report", "--db", str(database), "--out", str(old), "--studies", "skip", "--static",

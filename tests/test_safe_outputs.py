@@ -309,7 +309,7 @@ def _quick_sections(monkeypatch) -> None:
     from foucault_bench.reports import result_sections, study_sections
 
     monkeypatch.setattr(build, "SECTIONS", [section for section in build.SECTIONS
-                                            if section not in (study_sections.start_seed, study_sections.seed_section,
+                                            if section not in (study_sections.seed_section,
                                                                result_sections.recommendations)])
     monkeypatch.setattr(result_sections, "_scene_work_precision", lambda *arguments: None)
     monkeypatch.setattr(result_sections, "_scene_convergence", lambda *arguments: None)
