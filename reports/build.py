@@ -39,7 +39,7 @@ from foucault_bench.bench.problems.scene_key import scene_labels
 from foucault_bench.bench.run.store import ResultsStore
 from foucault_bench.bench.schema import COLUMN_NAMES
 from foucault_bench.bench.atomic import replacing_folder
-from foucault_bench.bench.studies import STUDIES, StudyTables
+from foucault_bench.bench.studies import STUDIES, StudyTables, stored_studies
 from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS
 from foucault_bench.reports import ensembles, halls, result_sections, study_sections
 from foucault_bench.reports.builder import INDEX, Builder, ReportInputs, file_stem
@@ -153,18 +153,12 @@ def _study_tables(store: ResultsStore, db: Path, recompute: bool, jobs: int) -> 
     computed for this report only."""
     writable = os.access(db, os.W_OK) and os.access(Path(db).resolve().parent, os.W_OK)
     if not writable:
-        missing = list(STUDIES) if recompute else [name for name in STUDIES if not _stored(store, name)]
+        stored = stored_studies(store, recompute)
+        missing = [name for name in STUDIES if name not in stored]
         if missing:
             print(f"note: {db} is read-only: the study tables {', '.join(missing)} are computed for this report "
                   "and not stored", file=sys.stderr)
     return StudyTables(store, recompute=recompute, store_computed=writable, jobs=jobs)
-
-
-def _stored(store: ResultsStore, name: str) -> bool:
-    try:
-        return not store.read_table(name).empty
-    except KeyError:
-        return False
 
 
 __all__ = ["SECTIONS", "ReportInputs", "build_report", "file_stem", "write_report"]

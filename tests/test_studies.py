@@ -255,7 +255,7 @@ def test_a_failing_part_raises_at_its_lookup_and_leaves_no_worker_behind(monkeyp
 def test_a_stored_study_of_another_version_is_recomputed() -> None:
     """A table stored before the release-azimuth study kept the step taken (no ``study_version`` column: version
     1) is not shown as the current study: it is recomputed, and the new table says its version."""
-    from foucault_bench.bench.studies import STUDY_VERSION_COLUMN
+    from foucault_bench.bench.studies import STUDY_VERSION_COLUMN, stored_studies
 
     small = {
         "study_long_time_energy": LongTimeEnergyConfig(model="linear", duration_s=60.0, n_out=31,
@@ -271,6 +271,9 @@ def test_a_stored_study_of_another_version_is_recomputed() -> None:
     old_table = current["study_release_azimuth"].drop(columns=[STUDY_VERSION_COLUMN, "kh_requested"]).assign(kh=0.1)
     store.tables["study_release_azimuth"] = old_table
     store.tables["study_stability"] = current["study_stability"].assign(kh=-1.0)  # current version, marked
+    # what StudyTables reads and what the report's read-only note counts as stored (bench.studies.stored_studies)
+    assert "study_release_azimuth" not in stored_studies(store) and "study_stability" in stored_studies(store)
+    assert stored_studies(store, recompute=True) == {}
     again = ensure_studies(store, configs=small, progress=False)
     assert (again["study_release_azimuth"][STUDY_VERSION_COLUMN] == STUDIES["study_release_azimuth"].version).all()
     assert (again["study_release_azimuth"]["kh"] < 0.1).all()

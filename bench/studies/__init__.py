@@ -25,7 +25,7 @@ from foucault_bench.bench.studies.precession import (
 from foucault_bench.bench.studies.seed import SeedConfig, SeedStudy, centrifugal_check, seed_revisited
 from foucault_bench.bench.studies.stability import StabilitySweepConfig, stability_sweep
 from foucault_bench.bench.studies.stored import (
-    STUDIES, STUDY_VERSION_COLUMN, Study, StudyTables, ensure_studies, stored_version,
+    STUDIES, STUDY_VERSION_COLUMN, Study, StudyTables, ensure_studies, stored_studies, stored_version,
 )
 
 __all__ = [
@@ -34,5 +34,5 @@ __all__ = [
     "StabilitySweepConfig", "Study", "StudyTables", "centrifugal_check", "energy_trends", "ensure_studies",
     "family_representatives", "long_time_energy", "midpoint_precession_law", "precession_vs_latitude",
     "precession_vs_release_azimuth", "relative_energy_error", "roundoff_growth", "seed_revisited", "solve_with_setting",
-    "stability_sweep", "stored_version", "structure_preserving_integrators", "study_setting_label",
+    "stability_sweep", "stored_studies", "stored_version", "structure_preserving_integrators", "study_setting_label",
 ]

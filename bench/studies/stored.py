@@ -87,6 +87,22 @@ class TableStore(Protocol):
         """Store ``frame`` as table ``name``, replacing it."""
 
 
+def stored_studies(store: TableStore | None, recompute: bool = False) -> dict[str, pd.DataFrame]:
+    """The studies' tables that ``store`` holds at their current ``Study.version`` (none with ``recompute``, or
+    without a store): those ``StudyTables`` reads instead of computing."""
+    tables: dict[str, pd.DataFrame] = {}
+    if store is None or recompute:
+        return tables
+    for name, study in STUDIES.items():
+        try:
+            stored = store.read_table(name)
+        except KeyError:
+            continue
+        if not stored.empty and stored_version(stored) == study.version:
+            tables[name] = stored
+    return tables
+
+
 def ensure_studies(store: TableStore | None, recompute: bool = False, configs: dict[str, object] | None = None,
                    progress: bool = True, store_computed: bool = True, jobs: int = 1) -> dict[str, pd.DataFrame]:
     """Every study's table (``StudyTables``, waited for): read from ``store`` or computed, and stored."""
@@ -112,21 +128,12 @@ class StudyTables(Mapping[str, pd.DataFrame]):
         configs = configs or {}
         self._store = store if store_computed else None
         self._progress = progress
-        self._tables: dict[str, pd.DataFrame] = {}
-        for name, study in STUDIES.items():
-            if store is not None and not recompute:
-                try:
-                    stored = store.read_table(name)
-                except KeyError:
-                    continue
-                if not stored.empty and stored_version(stored) == study.version:
-                    self._tables[name] = stored
+        self._tables = stored_studies(store, recompute)
         missing = [(name, configs.get(name, STUDIES[name].config)) for name in STUDIES if name not in self._tables]
         tasks = [(name, index, part)
                  for name, config in missing for index, part in enumerate(STUDIES[name].split(config))]
         self._pieces: dict[str, dict[int, pd.DataFrame]] = {name: {} for name, _ in missing}
         self._counts = Counter(name for name, _, _ in tasks)
-        self._total, self._done = len(tasks), 0
         self._pool: multiprocessing.pool.Pool | None = None
         self._arrived: queue.SimpleQueue[tuple[str, int, pd.DataFrame] | BaseException] = queue.SimpleQueue()
         self._bar: tqdm | None = None
@@ -187,12 +194,11 @@ class StudyTables(Mapping[str, pd.DataFrame]):
             if isinstance(arrived, BaseException):
                 raise arrived
             study, index, table = arrived
-            self._done += 1
             pieces = self._pieces[study]
             pieces[index] = table
             if len(pieces) == self._counts[study]:
                 self._add(study, pd.concat([pieces[i] for i in range(len(pieces))], ignore_index=True))
-        if self._done == self._total:
+        if all(study in self._tables for study in self._pieces):  # every part in: the workers have nothing left
             self.close()
 
 
