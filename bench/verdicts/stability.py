@@ -1,8 +1,10 @@
-"""Linear stability and structure of a fixed-step scheme, measured on its own compiled step.
+"""Linear stability and structure of a fixed-step scheme, measured on the compiled loop the benchmark runs.
 
 On the linear model every fixed-step scheme of the suite is a linear map of the state (x, y, ẋ, ẏ) (the
 implicit ones up to their solve's round-off), so applying one step to the four unit states gives its matrix M
-exactly. From M:
+exactly. The step is taken by the scheme's loop on the linear model (``FixedStepIntegrator.kernel``, one step):
+the benchmark's own machine code, which ``foucault-bench run`` has compiled and cached already, where a separate
+one-step function would be compiled for every scheme (4.5 s of CPU in a new report, bench/PERF.md). From M:
 
 * ``spectral_growth``: max |λ(M)| − 1, the per-step growth of the fastest-growing mode (≤ 0 up to round-off
   for a stable step); the measured stability limit is the first k·h where it turns positive;
@@ -30,15 +32,21 @@ J = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.eye(2), np.zeros((2, 2))]])
 
 def step_matrix(integrator: FixedStepIntegrator, params: PendulumParameters, step_s: float) -> np.ndarray:
     """The 4×4 matrix of one step of ``integrator`` on the linear model (columns: images of the unit states,
-    velocities scaled by k so that the columns are of one size)."""
-    step = integrator.compiled_step(MODELS["linear"])
+    velocities scaled by k so that the columns are of one size), taken by the scheme's compiled loop (module
+    docstring) with no divergence radius: a column whose image is not finite, or whose speed reaches the loop's
+    1e300 bound, is NaN."""
+    loop = integrator.kernel(MODELS["linear"])
     p = params.parameter_vector()
     scale = np.array([1.0, 1.0, params.pendulum_frequency_rad_s, params.pendulum_frequency_rad_s])
     matrix = np.empty((4, 4))
+    out = np.empty((2, 4))
+    no_turning_points = np.empty((0, 3))
     for j in range(4):
         unit = np.zeros(4)
         unit[j] = scale[j]
-        matrix[:, j] = np.array(step(*unit, step_s, p)) / scale[j]
+        out[1] = math.nan  # the loop leaves the row unwritten when the step diverges
+        loop(unit, p, step_s, 1, 1, out, False, no_turning_points, math.inf)
+        matrix[:, j] = out[1] / scale[j]
     return matrix
 
 
