@@ -50,11 +50,10 @@ class ReportInputs:
         adequacy: rows of the ``adequacy`` table (scene, model, simpler_model, precession_rate_diff,
             trajectory_gap, note), possibly empty.
         provenance: label → value lines shown at the top (matrix id, host, commit, ...).
-        include_seed: add the seed-revisited section (computes the seed study, a few seconds).
         targets: target reference errors of the matched-accuracy summary.
         interactive: draw the charts of index.html with plotly (else the static PNGs only).
         static: write every chart's PNG and SVG under figures/ (else only those of the charts that are not
-            interactive, and of the seed section); REPORT.md shows the static files or links to index.html.
+            interactive); REPORT.md shows the static files or links to index.html.
         jobs: worker processes drawing the figures (1: in this process).
         revisions: code revisions whose runs the database holds (``bench.history``); with more than one, the
             report links its history page (``history/history.html``, ``reports.history_page``).
@@ -64,7 +63,6 @@ class ReportInputs:
     studies: Mapping[str, pd.DataFrame] = field(default_factory=dict)
     adequacy: pd.DataFrame = field(default_factory=pd.DataFrame)
     provenance: dict[str, str] = field(default_factory=dict)
-    include_seed: bool = True
     targets: tuple[float, ...] = DEFAULT_TARGETS
     interactive: bool = True
     static: bool = True

@@ -8,7 +8,7 @@ relative energy error, and the numeric-minus-analytic difference. Each is redraw
 stated assumptions where the note gives no numbers) beside a corrected figure, and followed by one paragraph
 saying which claim holds and which does not, with numbers. The computations are ``bench.studies.seed_revisited``
 (the suite's integrators and ``models.analytic``); this module only plots and writes. ``seed_blocks`` is also the
-report's section.
+report's section, drawn from the stored study table ``study_seed``.
 """
 
 from __future__ import annotations
@@ -224,10 +224,9 @@ def _findings(study: SeedStudy) -> dict[str, str]:
     }
 
 
-def seed_blocks(folder: Path, prefix: str) -> list[Block]:
-    """The seed section: computes the seed study, writes its figures under ``folder/prefix`` and returns the
-    blocks pointing to them."""
-    study = seed_revisited()
+def seed_blocks(folder: Path, prefix: str, study: SeedStudy, static: bool = True) -> list[Block]:
+    """The seed section of ``study``: its figures (plotly, and with ``static`` their PNG and SVG written under
+    ``folder/prefix``) and findings, as blocks."""
     c = study.config
     findings = _findings(study)
     blocks: list[Block] = [
@@ -250,9 +249,10 @@ def seed_blocks(folder: Path, prefix: str) -> list[Block]:
         ("difference", _difference, "Numeric minus analytic, and what it is made of."),
     ):
         figure = draw(study)
-        save(figure, folder / prefix / f"seed_{name}")
+        if static:
+            save(figure, folder / prefix / f"seed_{name}")
         plot = from_matplotlib(figure)
-        blocks += [Figure(f"{prefix}/seed_{name}", caption, plot.to_json(), drawn_points(plot)),
+        blocks += [Figure(f"{prefix}/seed_{name}", caption, plot.to_json(), drawn_points(plot), static=static),
                    Paragraph(findings[name])]
     blocks += [Heading("The centrifugal term", level=3), Paragraph(findings["centrifugal"])]
     return blocks
@@ -262,7 +262,7 @@ def write_seed(out: Path) -> int:
     """``foucault-bench seed``: the seed figures and findings written to folder ``out``, built beside it and
     swapped in whole (``bench.atomic.replacing_folder``; the command checks ``out`` first). Exit status 0."""
     with replacing_folder(out, "--out", "seed") as staging:
-        blocks = seed_blocks(staging, "figures")
+        blocks = seed_blocks(staging, "figures", seed_revisited())
         write_document(staging, "The seed note revisited", blocks[1:], markdown_name="SEED.md")
     print(f"seed figures and findings written: {out / 'index.html'} and {out / 'SEED.md'}")
     return 0

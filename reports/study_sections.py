@@ -9,6 +9,7 @@ from functools import partial
 
 import pandas as pd
 
+from foucault_bench.bench.studies import seed_study
 from foucault_bench.integrators import REGISTRY, STATUS_OK
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
 from foucault_bench.reports import study_charts, tables
@@ -192,7 +193,9 @@ def studies(builder: Builder, inputs: ReportInputs) -> None:
 
 
 def seed_section(builder: Builder, inputs: ReportInputs) -> None:
-    """The seed note revisited, on the studies page (its figures computed and drawn by ``reports.seed``)."""
-    if inputs.include_seed:
+    """The seed note revisited, on the studies page: the study ``study_seed`` drawn by ``reports.seed``."""
+    table = inputs.studies.get("study_seed")
+    if table is not None:
         builder.page(STUDIES_PAGE, "studies")
-        builder.later("seed section", partial(seed_blocks, builder.folder, "seed"), long=True, key="seed")
+        builder.later("seed section", partial(seed_blocks, builder.folder, "seed", seed_study(table), builder.static),
+                      long=True, key=(table, builder.static))

@@ -221,7 +221,7 @@ def build_fixture_report(database: Path, folder: Path) -> Path:
         runs = store.frame()
         adequacy = store.adequacy()
     build_report(ReportInputs(runs=runs, adequacy=adequacy, provenance={"database": database.name},
-                              include_seed=False, jobs=2), folder)
+                              jobs=2), folder)
     return folder
 
 

@@ -28,6 +28,7 @@ from foucault_bench.bench.studies import (
     StabilitySweepConfig,
     long_time_energy,
     precession_vs_latitude,
+    seed_series,
     stability_sweep,
 )
 import test_report_oracle_charts as oracle
@@ -85,10 +86,11 @@ def report_dom(tmp_path_factory) -> tuple[Path, dict[str, str]]:
         "study_stability": stability_sweep(StabilitySweepConfig(steps=200, kh=(0.5, 2.5, 3.5)), progress=False),
         "study_precession_latitude": precession_vs_latitude(PrecessionLatitudeConfig(
             duration_s=300.0, n_latitudes=5, amplitude_m=1.0), progress=False),
+        "study_seed": seed_series(),
     }
     runs = results_fixture()  # one scene: every kind of chart, half the figures
-    build_report(ReportInputs(runs=runs[runs["scene"] == "lab"], studies=studies, adequacy=adequacy_fixture(),
-                              include_seed=True), folder)
+    build_report(ReportInputs(runs=runs[runs["scene"] == "lab"], studies=studies, adequacy=adequacy_fixture()),
+                 folder)
     return folder, {page.name: _dom(page, tmp_path_factory.mktemp("browser-profile"))
                     for page in report_pages(folder)}
 

@@ -26,7 +26,7 @@ def _inputs(database: Path, runs: pd.DataFrame | None = None) -> ReportInputs:
     with ResultsStore(database, create=False) as store:
         stored, adequacy = store.frame(), store.adequacy()
     return ReportInputs(runs=stored if runs is None else runs, adequacy=adequacy,
-                        provenance={"database": database.name}, include_seed=False, jobs=2)
+                        provenance={"database": database.name}, jobs=2)
 
 
 def _log(folder: Path) -> dict[str, list[str]]:

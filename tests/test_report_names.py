@@ -38,7 +38,7 @@ def test_scenes_with_dots_get_their_own_figures_and_links(tmp_path: Path) -> Non
         part = runs[runs["scene"] == "lab"].copy()
         part["scene"] = name
         renamed.append(part)
-    build_report(ReportInputs(runs=pd.concat(renamed, ignore_index=True), include_seed=False, interactive=False),
+    build_report(ReportInputs(runs=pd.concat(renamed, ignore_index=True), interactive=False),
                  tmp_path)
     html = report_html(tmp_path)
     figures = sorted(set(re.findall(r"src='(figures/[^']+\.png)'", html)))

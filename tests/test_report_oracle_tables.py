@@ -190,7 +190,7 @@ def _awkward_runs(database: Path) -> pd.DataFrame:
 def awkward_report(fixture_database: Path, tmp_path_factory) -> tuple[Path, pd.DataFrame]:
     runs = _awkward_runs(fixture_database)
     folder = tmp_path_factory.mktemp("awkward-report")
-    build_report(ReportInputs(runs=runs, include_seed=False, interactive=False,
+    build_report(ReportInputs(runs=runs, interactive=False,
                               provenance={"database": PROVENANCE}), folder)
     return folder, runs
 

@@ -108,7 +108,7 @@ def small_studies() -> dict[str, pd.DataFrame]:
 def report(tmp_path_factory, small_studies) -> Path:
     folder = tmp_path_factory.mktemp("report")
     build_report(ReportInputs(runs=results_fixture(), studies=small_studies, adequacy=adequacy_fixture(),
-                              provenance={"matrix id": "fixture"}, include_seed=False), folder)
+                              provenance={"matrix id": "fixture"}), folder)
     return folder
 
 
@@ -243,12 +243,11 @@ def test_report_refuses_results_without_the_schema_columns(tmp_path: Path) -> No
     from foucault_bench.bench.errors import InputError
 
     with pytest.raises(InputError, match="reference_error"):
-        build_report(ReportInputs(runs=results_fixture().drop(columns=["reference_error"]), include_seed=False),
+        build_report(ReportInputs(runs=results_fixture().drop(columns=["reference_error"])),
                      tmp_path)
 
 
-def test_report_command_reads_the_results_database(tmp_path: Path, monkeypatch) -> None:
-    from foucault_bench.reports import study_sections
+def test_report_command_reads_the_results_database(tmp_path: Path) -> None:
     from foucault_bench.bench.cli import main as cli_main
     from foucault_bench.bench.run.matrix import Matrix
     from foucault_bench.bench.run.store import ResultsStore
@@ -266,7 +265,6 @@ def test_report_command_reads_the_results_database(tmp_path: Path, monkeypatch) 
         store.write_adequacy(matrix_id, "lab", adequacy_fixture().query("scene == 'lab'").drop(columns="scene")
                              .to_dict("records"))
         store.finish_matrix_run(matrix_id)
-    monkeypatch.setattr(study_sections, "seed_blocks", lambda folder, prefix: [])  # tested in test_seed.py
     out = tmp_path / "report"
     assert cli_main(["report", "--db", str(database), "--out", str(out), "--studies", "skip"]) == 0
     markdown = (out / "REPORT.md").read_text(encoding="utf-8")
@@ -319,8 +317,7 @@ def test_the_report_says_how_each_family_s_cost_was_measured() -> None:
     assert "Family multistep: cvode_bdf_py: Python-driven" in text
 
 
-def test_a_database_where_every_run_timed_out_is_reported_and_advised_on(tmp_path: Path, monkeypatch,
-                                                                         capsys) -> None:
+def test_a_database_where_every_run_timed_out_is_reported_and_advised_on(tmp_path: Path, capsys) -> None:
     """Every run of the matrix timed out, so every verdict column is NULL in the database: the report says so
     (each integrator's row counts its timeouts) and ``advise`` says no run meets the target (exit status 1),
     instead of a traceback (the columns once came back as Python ``None`` objects, and ``abs`` of one raised)."""
@@ -330,7 +327,6 @@ def test_a_database_where_every_run_timed_out_is_reported_and_advised_on(tmp_pat
     from foucault_bench.bench.run.matrix import Matrix
     from foucault_bench.bench.run.store import ResultsStore
     from foucault_bench.bench.run.timing import TimingPolicy
-    from foucault_bench.reports import study_sections
 
     scene = SCENES["seed_2min"]
     database = tmp_path / "timeouts.sqlite"
@@ -351,7 +347,6 @@ def test_a_database_where_every_run_timed_out_is_reported_and_advised_on(tmp_pat
                      "--no-search"]) == 1  # the exit status of "no run meets the target"
     answer = capsys.readouterr().out
     assert "no run meets the target" in answer and "from 2 stored runs of seed_2min; 0 meet the target" in answer
-    monkeypatch.setattr(study_sections, "seed_blocks", lambda folder, prefix: [])
     out = tmp_path / "report"
     assert cli_main(["report", "--db", str(database), "--out", str(out), "--studies", "skip"]) == 0
     per_integrator = pd.read_csv(out / "tables" / "per_integrator.csv")

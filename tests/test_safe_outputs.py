@@ -544,7 +544,8 @@ def test_a_run_onto_a_real_full_disk_keeps_the_stored_rows(tmp_path, free_kb):
 def test_a_full_disk_while_writing_seed_figures_keeps_the_old_folder(tmp_path, monkeypatch, capsys):
     import foucault_bench.reports.seed as seed
 
-    monkeypatch.setattr(seed, "seed_blocks", lambda folder, prefix: [None])  # the study itself: test_seed.py
+    monkeypatch.setattr(seed, "seed_revisited", lambda: None)  # the study itself: test_seed.py
+    monkeypatch.setattr(seed, "seed_blocks", lambda folder, prefix, study: [None])
     out = tmp_path / "seed"
     assert cli_main(["seed", "--out", str(out)]) == 0
     old = folder_digest(out)

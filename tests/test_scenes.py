@@ -254,7 +254,7 @@ def test_a_report_for_the_longest_scene_name_writes_every_file_within_255_bytes(
     runs = results_fixture()
     runs = runs[(runs["scene"] == "lab") & runs["integrator"].isin(["rk4", "heyoka_taylor"])].copy()
     runs["scene"] = longest
-    build_report(ReportInputs(runs=pd.DataFrame(runs), include_seed=False, interactive=False), tmp_path)
+    build_report(ReportInputs(runs=pd.DataFrame(runs), interactive=False), tmp_path)
     names = [path.name for path in tmp_path.rglob("*")]
     stem = file_stem(longest)
     assert len(stem) == 2 * MAX_SCENE_NAME_LENGTH

@@ -7,10 +7,12 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from foucault_bench.bench.cli import main as cli_main
-from foucault_bench.bench.studies import SeedStudy, seed_revisited
+from foucault_bench.bench.run.store import ResultsStore
+from foucault_bench.bench.studies import SeedStudy, seed_revisited, seed_series, seed_study
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
 
 
@@ -111,3 +113,17 @@ def test_seed_command_writes_figures_and_findings(tmp_path: Path, study: SeedStu
     text = (tmp_path / "SEED.md").read_text(encoding="utf-8")
     assert text.count("**Does not hold:**") == 2 and "**Sign slip:**" in text and "0.27 %" in text
     assert "figures/seed_energy.png" in (tmp_path / "index.html").read_text(encoding="utf-8")
+
+
+def test_the_stored_seed_table_gives_the_same_study(tmp_path: Path, study: SeedStudy) -> None:
+    """The report draws the seed section from the table ``study_seed`` stored in the results database
+    (``bench.studies.STUDIES``): read back, it gives the study computed directly, its config, series and numbers
+    bit for bit."""
+    with ResultsStore(tmp_path / "results.sqlite") as store:
+        store.write_table("study_seed", seed_series())
+        stored = seed_study(store.read_table("study_seed"))
+    assert stored.config == study.config
+    pd.testing.assert_frame_equal(stored.series, study.series, check_exact=True)
+    assert stored.numbers.keys() == study.numbers.keys()
+    assert all(np.float64(stored.numbers[name]).tobytes() == np.float64(study.numbers[name]).tobytes()
+               for name in study.numbers)

@@ -18,6 +18,7 @@ from foucault_bench.bench.studies import (
     LongTimeEnergyConfig,
     PrecessionLatitudeConfig,
     ReleaseAzimuthConfig,
+    SeedConfig,
     StabilitySweepConfig,
     ensure_studies,
     family_representatives,
@@ -193,6 +194,7 @@ def test_ensure_studies_computes_missing_tables_once_and_reads_them_back() -> No
         "study_precession_latitude": PrecessionLatitudeConfig(duration_s=120.0, n_latitudes=3),
         "study_release_azimuth": ReleaseAzimuthConfig(latitudes_deg=(40.44,), azimuths_deg=(0.0,), duration_s=60.0),
         "study_long_time_roundoff": RoundoffConfig(integrators=("verlet",), max_decade=4, releases=2),
+        "study_seed": SeedConfig(duration_s=10.0),
     }
     store = _MemoryStore()
     first = ensure_studies(store, configs=small, progress=False)
@@ -222,6 +224,7 @@ def test_the_parts_of_a_split_study_make_up_its_table_row_for_row() -> None:
                                                       duration_s=60.0, integrators=("verlet", "implicit_midpoint")),
         "study_long_time_roundoff": RoundoffConfig(integrators=("verlet", "yoshida4", "gauss_legendre4"),
                                                    max_decade=4, releases=2),
+        "study_seed": SeedConfig(duration_s=10.0),
     }
     split = {name for name, study in STUDIES.items() if study.parts is not None}
     assert split and all(len(STUDIES[name].split(several[name])) >= 3 for name in split)
@@ -265,6 +268,7 @@ def test_a_stored_study_of_another_version_is_recomputed() -> None:
         "study_release_azimuth": ReleaseAzimuthConfig(latitudes_deg=(40.44,), azimuths_deg=(0.0,), duration_s=60.0,
                                                       integrators=("verlet",)),
         "study_long_time_roundoff": RoundoffConfig(integrators=("verlet",), max_decade=4, releases=2),
+        "study_seed": SeedConfig(duration_s=10.0),
     }
     store = _MemoryStore()
     current = ensure_studies(store, configs=small, progress=False)

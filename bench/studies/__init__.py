@@ -22,7 +22,9 @@ from foucault_bench.bench.studies.precession import (
     MIDPOINT_INTEGRATOR, PrecessionLatitudeConfig, ReleaseAzimuthConfig, midpoint_precession_law,
     precession_vs_latitude, precession_vs_release_azimuth,
 )
-from foucault_bench.bench.studies.seed import SeedConfig, SeedStudy, centrifugal_check, seed_revisited
+from foucault_bench.bench.studies.seed import (
+    SeedConfig, SeedStudy, centrifugal_check, seed_revisited, seed_series, seed_study,
+)
 from foucault_bench.bench.studies.stability import StabilitySweepConfig, stability_sweep
 from foucault_bench.bench.studies.stored import (
     STUDIES, STUDY_VERSION_COLUMN, Study, StudyTables, ensure_studies, stored_studies, stored_version,
@@ -33,6 +35,7 @@ __all__ = [
     "PrecessionLatitudeConfig", "ReleaseAzimuthConfig", "RoundoffConfig", "STUDIES", "STUDY_VERSION_COLUMN", "SeedConfig", "SeedStudy",
     "StabilitySweepConfig", "Study", "StudyTables", "centrifugal_check", "energy_trends", "ensure_studies",
     "family_representatives", "long_time_energy", "midpoint_precession_law", "precession_vs_latitude",
-    "precession_vs_release_azimuth", "relative_energy_error", "roundoff_growth", "seed_revisited", "solve_with_setting",
+    "precession_vs_release_azimuth", "relative_energy_error", "roundoff_growth", "seed_revisited", "seed_series", "seed_study",
+    "solve_with_setting",
     "stability_sweep", "stored_studies", "stored_version", "structure_preserving_integrators", "study_setting_label",
 ]

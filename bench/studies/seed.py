@@ -5,7 +5,7 @@ and the corrections its findings name (symplectic Euler, Verlet; RK4 at a quarte
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 import pandas as pd
@@ -21,9 +21,7 @@ from foucault_bench.integrators import (
 from foucault_bench.models import PendulumParameters, get_model
 from foucault_bench.models.analytic import linear_exact, seed_approximate, seed_gap_bound
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S, STANDARD_GRAVITY_M_S2
-from foucault_bench.bench.studies.common import (
-    relative_energy_error,
-)
+from foucault_bench.bench.studies.common import relative_energy_error, with_config_columns
 
 
 @dataclass(frozen=True)
@@ -98,8 +96,21 @@ def centrifugal_check(config: SeedConfig, position_m: tuple[float, float] = (0.3
     }
 
 
-def seed_revisited(config: SeedConfig = SeedConfig()) -> SeedStudy:
-    """Reproduce the seed note's four figures and the numbers that correct them (see ``SeedStudy``)."""
+_SERIES_COLUMNS = frozenset((
+    "t_s", "seed_x_m", "seed_y_m", "exact_x_m", "exact_y_m", "euler_x_m", "euler_y_m", "verlet_x_m", "verlet_y_m",
+    "euler_amplitude_theory_m", "euler_energy_rel_error", "euler_energy_theory", "symplectic_energy_rel_error",
+    "verlet_energy_rel_error", "model_energy_rel_error", "model_energy_formula", "seed_difference_m",
+    "euler_error_m", "model_difference_m", "approximation_gap_m", "approximation_gap_bound_m",
+    "day_length_difference_m", "verlet_linear_error_m",
+))
+"""The columns of ``SeedStudy.series`` (``seed_series`` adds the config's)."""
+
+
+def seed_series(config: SeedConfig = SeedConfig(), progress: bool = False) -> pd.DataFrame:
+    """The seed study's table (stored as ``study_seed``, ``bench.studies.STUDIES``): the series of ``SeedStudy``
+    on the output grid, plus the config's fields as constant ``config_<field>`` columns. ``progress`` is unused
+    (the study is a handful of runs of a few hundred thousand steps)."""
+    del progress
     linear = get_model("linear")
     seed_planar = get_model("seed_planar")
     seed_params = _params(config, SEED_EARTH_RATE_RAD_S)
@@ -147,19 +158,32 @@ def seed_revisited(config: SeedConfig = SeedConfig()) -> SeedStudy:
         "day_length_difference_m": _distance(exact, exact_seed_rate),
         "verlet_linear_error_m": _distance(verlet_linear, exact),
     })
+    return with_config_columns(series, config, exclude=())
+
+
+def seed_study(table: pd.DataFrame) -> SeedStudy:
+    """The ``SeedStudy`` of a ``seed_series`` table (stored or just computed): its config from the ``config_``
+    columns, its series from the others, and the scalar findings computed from both."""
+    config = SeedConfig(**{f.name: float(table[f"config_{f.name}"].iloc[0]) for f in fields(SeedConfig)})
+    series = table[[name for name in table.columns if name in _SERIES_COLUMNS]].reset_index(drop=True)
+    seed_params = _params(config, SEED_EARTH_RATE_RAD_S)
+    t = series["t_s"].to_numpy()
+    euler_x, euler_y = series["euler_x_m"].to_numpy(), series["euler_y_m"].to_numpy()
+    verlet_x, verlet_y = series["verlet_x_m"].to_numpy(), series["verlet_y_m"].to_numpy()
+    formula = series["model_energy_formula"].to_numpy()
     last_swing = np.nonzero(t >= t[-1] - seed_params.small_swing_period_s)[0]
-    euler_reach = last_swing[np.argmax(np.hypot(euler[last_swing, 0], euler[last_swing, 1]))]
+    euler_reach = last_swing[np.argmax(np.hypot(euler_x[last_swing], euler_y[last_swing]))]
     numbers = {
-        "kh": kh,
-        "euler_amplitude_end_m": float(np.hypot(euler[euler_reach, 0], euler[euler_reach, 1])),
+        "kh": seed_params.pendulum_frequency_rad_s * config.euler_step_s,
+        "euler_amplitude_end_m": float(np.hypot(euler_x[euler_reach], euler_y[euler_reach])),
         "euler_amplitude_theory_end_m": float(series["euler_amplitude_theory_m"].iloc[euler_reach]),
-        "verlet_amplitude_end_m": float(np.max(np.hypot(verlet[last_swing, 0], verlet[last_swing, 1]))),
+        "verlet_amplitude_end_m": float(np.max(np.hypot(verlet_x[last_swing], verlet_y[last_swing]))),
         "euler_steps": config.duration_s / config.euler_step_s,
         "solar_day_rate_rad_s": SEED_EARTH_RATE_RAD_S,
         "sidereal_rate_rad_s": SIDEREAL_EARTH_RATE_RAD_S,
         "day_rate_shortfall": 1.0 - SEED_EARTH_RATE_RAD_S / SIDEREAL_EARTH_RATE_RAD_S,
-        "seed_max_sideways_m": float(np.max(np.abs(approx[:, 0]))),
-        "exact_max_sideways_m": float(np.max(np.abs(exact[:, 0]))),
+        "seed_max_sideways_m": float(np.max(np.abs(series["seed_x_m"].to_numpy()))),
+        "exact_max_sideways_m": float(np.max(np.abs(series["exact_x_m"].to_numpy()))),
         "euler_energy_final": float(series["euler_energy_rel_error"].iloc[-1]),
         "euler_energy_theory_final": float(series["euler_energy_theory"].iloc[-1]),
         "symplectic_energy_max": float(series["symplectic_energy_rel_error"].abs().max()),
@@ -180,3 +204,8 @@ def seed_revisited(config: SeedConfig = SeedConfig()) -> SeedStudy:
         **centrifugal_check(config),
     }
     return SeedStudy(config=config, series=series, numbers=numbers)
+
+
+def seed_revisited(config: SeedConfig = SeedConfig()) -> SeedStudy:
+    """Reproduce the seed note's four figures and the numbers that correct them (see ``SeedStudy``)."""
+    return seed_study(seed_series(config))

@@ -22,6 +22,7 @@ from foucault_bench.bench.studies.precession import (
     PrecessionLatitudeConfig, ReleaseAzimuthConfig, precession_vs_latitude, precession_vs_release_azimuth,
     release_azimuth_parts,
 )
+from foucault_bench.bench.studies.seed import SeedConfig, seed_series
 from foucault_bench.bench.studies.stability import StabilitySweepConfig, stability_sweep, stability_sweep_parts
 
 
@@ -53,10 +54,13 @@ STUDIES: dict[str, Study] = {
     for study in (
         # In the order the worker processes of ``StudyTables`` take the studies' parts: the longest study first, so
         # that the last part to end is a short one (CPU of each default config, one process, 2-core AMD EPYC,
-        # 2026-12-05: round-off 8.0 s, stability 4.4 s or 7.9 s compiling from cold, release azimuth 2.3 s,
-        # energy 1.3 s, latitude 0.6 s; the longest single part is composition10's round-off, 3.7 s).
+        # 2026-12-05: round-off 8.0 s, stability 4.4 s, seed 0.3 s or 5 s compiling the seed model's loops on a
+        # new machine (the main job never runs that model), release azimuth 2.3 s, energy 1.3 s, latitude 0.6 s;
+        # the longest single part is composition10's round-off, 3.7 s).
         # version 2: composition8 and composition10 too
         Study("study_long_time_roundoff", roundoff_growth, RoundoffConfig(), version=2, parts=roundoff_growth_parts),
+        # the seed note revisited (reports.seed draws it)
+        Study("study_seed", seed_series, SeedConfig()),
         # version 2: the k·h grid goes on to 6.5, so that every declared limit (composition10: 5.97) lies inside it
         Study("study_stability", stability_sweep, StabilitySweepConfig(), version=2, parts=stability_sweep_parts),
         # version 2: kh is the step taken (kh_requested the configured one); no rk4
