@@ -127,3 +127,21 @@ def test_the_stored_seed_table_gives_the_same_study(tmp_path: Path, study: SeedS
     assert stored.numbers.keys() == study.numbers.keys()
     assert all(np.float64(stored.numbers[name]).tobytes() == np.float64(study.numbers[name]).tobytes()
                for name in study.numbers)
+
+
+def test_the_report_s_seed_figures_are_static_files_only_with_static(tmp_path: Path, study: SeedStudy) -> None:
+    """Like every chart of the report, the seed section's four charts get their PNG and SVG under the report's
+    folder only when the report is built with ``--static``; without it their blocks say so (REPORT.md then
+    links the interactive chart)."""
+    from foucault_bench.reports.document import Figure
+    from foucault_bench.reports.seed import seed_blocks
+
+    interactive_only = [b for b in seed_blocks(tmp_path / "a", "seed", study, static=False) if isinstance(b, Figure)]
+    assert len(interactive_only) == 4 and not any(figure.static for figure in interactive_only)
+    assert all(figure.interactive for figure in interactive_only) and not (tmp_path / "a").exists()
+    static = [b for b in seed_blocks(tmp_path / "b", "seed", study, static=True) if isinstance(b, Figure)]
+    assert [figure.stem for figure in static] == [figure.stem for figure in interactive_only]
+    for figure in static:
+        assert figure.static
+        for suffix in ("png", "svg"):
+            assert (tmp_path / "b" / f"{figure.stem}.{suffix}").stat().st_size > 1000
