@@ -25,7 +25,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="replace an existing --out folder that is not an earlier report (its files are lost)")
     parser.add_argument("--studies", choices=("stored", "recompute", "skip"), default="stored",
                         help="study tables: read from the database and compute missing ones (stored, default), "
-                             "recompute all, or leave the study sections out (skip)")
+                             "recompute all, or leave the study sections out, the seed note's too (skip)")
     parser.add_argument("--targets", type=float, nargs="+", default=list(DEFAULT_TARGETS), metavar="ERROR",
                         help="target reference errors of the matched-accuracy summary (default: "
                              f"{' '.join(f'{t:g}' for t in DEFAULT_TARGETS)})")
