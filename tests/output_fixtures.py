@@ -7,6 +7,7 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -87,12 +88,23 @@ def leftovers(folder: Path) -> list[str]:
                                                         for kind in ("partial", "building", "previous")))
 
 
-def in_mount_namespace(setup: str, command: list[str], teardown: str = "", **kwargs) -> subprocess.CompletedProcess:
+def in_mount_namespace(setup: str, command: list[str], teardown: str = "", timeout: float | None = None,
+                       **kwargs) -> subprocess.CompletedProcess:
     """Run ``command`` between the shell lines ``setup`` (mounts) and ``teardown`` in a private mount namespace
-    (``CAN_MOUNT``); the exit status is the command's."""
+    (``CAN_MOUNT``); the exit status is the command's. Past ``timeout`` seconds the whole process group is killed,
+    the command's own children too (a report's pool workers), and ``subprocess.TimeoutExpired`` raised: a hung
+    command fails its test and leaves no process behind."""
     script = f"set -e\n{setup}\nset +e\n\"$@\"\nstatus=$?\n{teardown}\nexit $status"
-    return subprocess.run(["unshare", "-m", "--propagation", "private", "sh", "-c", script, "sh", *command],
-                          capture_output=True, text=True, **kwargs)
+    with subprocess.Popen(["unshare", "-m", "--propagation", "private", "sh", "-c", script, "sh", *command],
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                          **kwargs) as process:
+        try:
+            stdout, stderr = process.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.communicate()
+            raise
+    return subprocess.CompletedProcess(process.args, process.returncode, stdout, stderr)
 
 
 def full_disk(folder: Path, size_kb: int) -> tuple[str, str, Path]:
