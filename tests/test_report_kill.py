@@ -207,3 +207,30 @@ def test_the_report_s_workers_end_when_the_report_is_killed() -> None:
     while any(_alive(pid) for pid in workers) and time.monotonic() < deadline:
         time.sleep(0.05)
     assert not any(_alive(pid) for pid in workers), workers
+
+
+POOL_WITH_A_CRASHED_WORKER = """
+import multiprocessing, os, time
+from foucault_bench.bench.parent_death import worker_pool
+for _ in range(5):
+    pool = worker_pool(multiprocessing.get_context("fork"), 1)
+    first = pool._pool[0].pid
+    pool.apply_async(os._exit, (3,))  # a task that ends its worker: the pool forks a replacement from its own thread
+    while not any(worker.pid != first and worker.is_alive() for worker in pool._pool):
+        time.sleep(0.05)
+    time.sleep(0.5)  # the replacement waits for a task, holding the task queue's lock
+    pool.terminate()
+print("terminated", flush=True)
+"""
+
+
+def test_a_pool_whose_worker_crashed_still_terminates() -> None:
+    """A worker that dies in a task is replaced by the pool from its worker-handler thread, which ends in
+    ``terminate()``. Killing the replacement then (prctl's parent-death signal follows the forking thread) left it
+    dead holding the pool's task-queue lock, and ``terminate()`` waited for that lock forever: 2 of 3 pools hung
+    before ``bench.parent_death`` gave such replacements the watchdog only. Five pools here, each must end."""
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", POOL_WITH_A_CRASHED_WORKER], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0 and done.stdout == "terminated\n", done.stderr[-2000:]
