@@ -33,8 +33,8 @@ J = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.eye(2), np.zeros((2, 2))]])
 def step_matrix(integrator: FixedStepIntegrator, params: PendulumParameters, step_s: float) -> np.ndarray:
     """The 4×4 matrix of one step of ``integrator`` on the linear model (columns: images of the unit states,
     velocities scaled by k so that the columns are of one size), taken by the scheme's compiled loop (module
-    docstring) with no divergence radius: a column whose image is not finite, or whose speed reaches the loop's
-    1e300 bound, is NaN."""
+    docstring) with no divergence radius. A step that the loop stops as diverged (a NaN position, or a speed at
+    its 1e300 bound) leaves its column NaN; either way ``spectral_growth`` of such a matrix is NaN."""
     loop = integrator.kernel(MODELS["linear"])
     p = params.parameter_vector()
     scale = np.array([1.0, 1.0, params.pendulum_frequency_rad_s, params.pendulum_frequency_rad_s])
