@@ -9,7 +9,16 @@ from functools import partial
 
 import pandas as pd
 
-from foucault_bench.bench.studies import seed_study
+from foucault_bench.bench.studies import (
+    BOUNDED_BELOW_EXPONENT,
+    GROWING_ABOVE_EXPONENT,
+    energy_trends,
+    family_representatives,
+    midpoint_precession_law,
+    seed_study,
+    structure_preserving_integrators,
+    study_setting_label,
+)
 from foucault_bench.integrators import REGISTRY, STATUS_OK
 from foucault_bench.models.parameters import SIDEREAL_EARTH_RATE_RAD_S
 from foucault_bench.reports import study_charts, tables
@@ -27,15 +36,6 @@ def studies(builder: Builder, inputs: ReportInputs) -> None:
     studies = inputs.studies
     if studies:
         builder.page(STUDIES_PAGE, "studies")
-    from foucault_bench.bench.studies import (
-        BOUNDED_BELOW_EXPONENT,
-        GROWING_ABOVE_EXPONENT,
-        energy_trends,
-        family_representatives,
-        midpoint_precession_law,
-        structure_preserving_integrators,
-        study_setting_label,
-    )
 
     def span(seconds: float) -> str:
         return f"{seconds / 3600:g} h" if seconds >= 3600 else f"{seconds:g} s"

@@ -88,6 +88,28 @@ def leftovers(folder: Path) -> list[str]:
                                                         for kind in ("partial", "building", "previous")))
 
 
+def alive(pid: int) -> bool:
+    """Whether process ``pid`` exists and is not a zombie (an orphan's zombie waits for a reaper that a container's
+    first process may never be)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+    return state != "Z"
+
+
+def processes_running(text: str) -> list[int]:
+    """The ids of the live processes (``alive``) whose command line holds ``text``."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        try:
+            if entry.name.isdigit() and text in (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode():
+                found.append(int(entry.name))
+        except OSError:  # ended while being read
+            continue
+    return [pid for pid in found if alive(pid)]
+
+
 def in_mount_namespace(setup: str, command: list[str], teardown: str = "", timeout: float | None = None,
                        **kwargs) -> subprocess.CompletedProcess:
     """Run ``command`` between the shell lines ``setup`` (mounts) and ``teardown`` in a private mount namespace

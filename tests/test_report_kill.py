@@ -21,7 +21,7 @@ import pytest
 
 from foucault_bench.bench.atomic import MARKER, recover
 from foucault_bench.bench.cli import main as cli_main
-from output_fixtures import QUICK_ENVIRONMENT, folder_digest, leftovers, quick_report_command, tiny_database
+from output_fixtures import QUICK_ENVIRONMENT, alive, folder_digest, leftovers, quick_report_command, tiny_database
 
 pytestmark = pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="needs POSIX signals")
 
@@ -177,16 +177,6 @@ time.sleep(600.0)
 """
 
 
-def _alive(pid: int) -> bool:
-    """Whether process ``pid`` exists and is not a zombie (an orphan's zombie waits for a reaper that a container's
-    first process may never be)."""
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (FileNotFoundError, ProcessLookupError):
-        return False
-    return state != "Z"
-
-
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads process states from /proc")
 def test_the_report_s_workers_end_when_the_report_is_killed() -> None:
     """The report's fork workers end with it: a worker left drawing after a kill from outside would write into
@@ -199,14 +189,14 @@ def test_the_report_s_workers_end_when_the_report_is_killed() -> None:
     try:
         assert owner.stdout is not None
         workers = [int(pid) for pid in owner.stdout.readline().split()]
-        assert len(workers) == 2 and all(_alive(pid) for pid in workers)
+        assert len(workers) == 2 and all(alive(pid) for pid in workers)
     finally:
         owner.kill()
         owner.wait(timeout=60)
     deadline = time.monotonic() + 30.0
-    while any(_alive(pid) for pid in workers) and time.monotonic() < deadline:
+    while any(alive(pid) for pid in workers) and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert not any(_alive(pid) for pid in workers), workers
+    assert not any(alive(pid) for pid in workers), workers
 
 
 POOL_WITH_A_CRASHED_WORKER = """

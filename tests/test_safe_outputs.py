@@ -37,6 +37,7 @@ from output_fixtures import (
     full_disk,
     in_mount_namespace,
     leftovers,
+    processes_running,
     quick_report_command,
     read_only_setup,
     tiny_database,
@@ -221,20 +222,6 @@ def cli_command(*arguments: str | Path) -> list[str]:
     return [sys.executable, "-m", "foucault_bench.bench.cli", *map(str, arguments)]
 
 
-def _processes_running(text: str) -> list[int]:
-    """The ids of the live processes whose command line holds ``text``."""
-    found = []
-    for entry in Path("/proc").iterdir():
-        try:
-            if entry.name.isdigit() and text in (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode():
-                stat = (entry / "stat").read_text()
-                if stat[stat.rindex(")") + 2] != "Z":
-                    found.append(int(entry.name))
-        except OSError:  # ended while being read
-            continue
-    return found
-
-
 @pytest.mark.skipif(not CAN_MOUNT, reason="needs root and unshare for a private mount namespace")
 def test_a_command_past_its_time_limit_in_a_mount_namespace_leaves_no_process() -> None:
     """The tests' helper that runs a command on a full or read-only mount kills the command's own children too when
@@ -243,9 +230,9 @@ def test_a_command_past_its_time_limit_in_a_mount_namespace_leaves_no_process() 
     with pytest.raises(subprocess.TimeoutExpired):
         in_mount_namespace("true", ["sh", "-c", f"{child} & {child}"], timeout=1)
     deadline = time.monotonic() + 10.0  # SIGKILL is at once; a reparented child may take a moment to be reaped
-    while _processes_running(child) and time.monotonic() < deadline:
+    while processes_running(child) and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert _processes_running(child) == []
+    assert processes_running(child) == []
 
 
 @pytest.mark.skipif(not CAN_MOUNT, reason="needs root and unshare for a private tmpfs")
