@@ -2,8 +2,9 @@
 integers instead of Python's), and the numbers do not depend on it. Every mpmath operation rounds correctly at the
 working precision either way, and at the 34-40 digits used here both backends run the same algorithms (mpmath's
 backend-dependent cut-offs start at 400 bits), so the results are equal bit for bit, not close: the turning
-points' 40-digit Hermite system, the anisotropic model's exact solution and the 34-digit steppers of the order
-check, computed here and in a process that ``MPMATH_NOGMPY`` keeps on Python's integers."""
+points' 40-digit Hermite system and the anisotropic model's exact solution, computed here and in a process that
+``MPMATH_NOGMPY`` keeps on Python's integers. (The order check's 34-digit steppers compute with MPFR through gmpy2
+directly, not with mpmath: ``bench.gate.multiprecision_order``.)"""
 
 from __future__ import annotations
 
@@ -16,26 +17,15 @@ import mpmath.libmp
 
 COMPUTE = r"""
 import json
-import mpmath
 import mpmath.libmp
 import numpy as np
-from foucault_bench.bench.gate.multiprecision_order import DIGITS, exact_main_method, final_position
-from foucault_bench.bench.gate.order_sweep import order_parameters
 from foucault_bench.bench.problems.turning_points import _hermite_system
-from foucault_bench.integrators import Problem, get_integrator
-from foucault_bench.models import MODELS, PendulumParameters
+from foucault_bench.models import PendulumParameters
 from foucault_bench.models.analytic import anisotropic_linear_exact
 
 numbers = {"backend": mpmath.libmp.BACKEND, "hermite": _hermite_system(6).tobytes().hex()}
 params = PendulumParameters(length_m=3.0, latitude_deg=48.8, amplitude_m=0.1, support_anisotropy=1e-3)
 numbers["anisotropic"] = anisotropic_linear_exact(params, np.linspace(0.0, 500.0, 51)).tobytes().hex()
-model = MODELS["anisotropic_spherical"]
-problem = Problem(model, order_parameters(model), np.array([0.0, 10.0]))
-with mpmath.workdps(DIGITS):
-    for name in ("vern7", "fine_rkn5"):
-        # each value exactly: (sign, mantissa, exponent, bit count) as Python integers
-        numbers[name] = [[int(part) for part in value._mpf_]
-                         for value in final_position(exact_main_method(get_integrator(name)), problem, 12)]
 print(json.dumps(numbers))
 """
 

@@ -9,17 +9,18 @@ from __future__ import annotations
 import dataclasses
 import re
 from fractions import Fraction
-import mpmath
+
+import gmpy2
 import numpy as np
 import pytest
 
 from foucault_bench.bench.gate.conformance import ORDER_TOLERANCE, check_order
 from foucault_bench.bench.gate.multiprecision_order import (
-    DIGITS,
     FLOOR_ERROR,
     exact_main_method,
     final_position,
     measure_exact_order,
+    working_precision,
 )
 from foucault_bench.bench.gate.order_sweep import ROUND_OFF_PER_EVALUATION, order_parameters
 from foucault_bench.integrators import Problem, built_in_names, get_integrator
@@ -68,9 +69,9 @@ def test_the_34_digit_stepper_steps_the_compiled_main_method(name: str, model_na
     compiled = get_integrator(name).fixed_step_method()
     assert compiled is not None
     solution = compiled.solve(problem, step_s=duration_s / 20, monitor=False)
-    with mpmath.workdps(DIGITS):
+    with working_precision():
         x, y = final_position(get_integrator(name).tableau, problem, 20)
-        gap = float(mpmath.hypot(x - solution.y[-1, 0], y - solution.y[-1, 1])) / params.amplitude_m
+        gap = float(gmpy2.hypot(x - solution.y[-1, 0], y - solution.y[-1, 1])) / params.amplitude_m
     assert solution.steps == 20 and gap <= ROUND_OFF_PER_EVALUATION * solution.nfev, (gap, solution.nfev)
 
 
@@ -124,7 +125,7 @@ def test_the_34_digit_nystrom_step_is_the_pair_s_formula() -> None:
     h = 0.2 / FAST.pendulum_frequency_rad_s
     problem = Problem(MODELS["linear"], FAST, np.array([0.0, h]))
     in_double = one_step(FAST, h)[0]
-    with mpmath.workdps(DIGITS):
+    with working_precision():
         x, y = final_position(PAIR, problem, 1)
-        gap = float(mpmath.hypot(x - in_double[0], y - in_double[1])) / FAST.amplitude_m
+        gap = float(gmpy2.hypot(x - in_double[0], y - in_double[1])) / FAST.amplitude_m
     assert gap <= 1e-15, gap

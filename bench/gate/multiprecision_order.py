@@ -22,13 +22,18 @@ point is fitted too, as it carries no round-off), where a run would take more th
 (a method of much lower order than declared: the check fails, at a bounded cost), or where a run fails (a
 non-real state on the sphere: error ∞).
 
-The right-hand side is the model's one force source (``Model.acceleration``) over mpmath's ``sqrt``, ``sin`` and
-``cos``, the source numba and heyoka compile; the release state and the parameters are the problem's doubles,
-exact in 34 digits. The reference, ``final_state_in_quad`` (``integrators.methods.heyoka_taylor``), is heyoka's
-Taylor method in IEEE binary128 at tol 1e-33, kept in binary128: about 1e-30 of the amplitude, far below the
-floor. Cost: 1-3 s of CPU per model for Verner's pairs and 5-10 s for ``fine_rkn5`` (mpmath in pure Python; the
-order-5 sweep takes thousands of steps to reach the floor), plus the reference's compilation where heyoka's disk
-cache does not hold it.
+The arithmetic is MPFR's binary floating point at ``PRECISION_BITS`` = 113 bits (IEEE binary128's precision, about
+34 significant digits: the reference's), through gmpy2 (Fousse et al., "MPFR: A multiple-precision binary
+floating-point library with correct rounding", ACM TOMS 33, 2007): every operation, ``sqrt``, ``sin`` and ``cos``
+included, is correctly rounded. Each stage's weighted sum Σⱼ aᵢⱼ kⱼ is the correctly rounded sum (``gmpy2.fsum``) of
+the products, each rounded once. The right-hand side is the model's one force source (``Model.acceleration``) over
+gmpy2's ``sqrt``, ``sin`` and ``cos``, the source numba and heyoka compile; the release state and the parameters are
+the problem's doubles, exact at 113 bits; an invalid operation (the square root of a negative number: the run left
+the sphere's domain) raises. The reference, ``final_state_in_quad`` (``integrators.methods.heyoka_taylor``), is
+heyoka's Taylor method in IEEE binary128 at tol 1e-33, kept in binary128: about 1e-30 of the amplitude, far below
+the floor. Cost: 0.1-0.5 s of CPU per model for Verner's pairs and 1-2 s for ``fine_rkn5`` (the order-5 sweep takes
+thousands of steps to reach the floor; each operation is a call from Python into MPFR), plus the reference's
+compilation where heyoka's disk cache does not hold it.
 """
 
 from __future__ import annotations
@@ -38,7 +43,7 @@ import types
 from fractions import Fraction
 from typing import Callable
 
-import mpmath
+import gmpy2
 import numpy as np
 
 from foucault_bench.bench.gate.order_sweep import (
@@ -58,14 +63,16 @@ from foucault_bench.models import Model, PendulumParameters
 ExactMethod = ButcherTableau | NystromPair
 """A main method whose coefficients are known exactly: a tableau with ``exact`` values, or an RKN pair (fractions)."""
 
+PRECISION_BITS = 113
+"""The stepper's precision in bits: IEEE binary128's (about 34 significant digits), the reference's."""
 DIGITS = 34
-"""mpmath's working precision: binary128's 34 significant digits, the reference's."""
+"""``PRECISION_BITS`` in decimal digits, as messages say it."""
 FLOOR_ERROR = 1e-18
 """The sweep's last error (final position, units of the amplitude): twelve decades above the reference's error, and
 where the local slopes of ``vern7`` and ``vern9`` are within 0.03 of their orders on every model (near 1e-15
 they are still up to 0.05 off)."""
 MAX_EXACT_RUN_STEPS = 20_000
-"""The most steps of one 34-digit run (mpmath: 0.5-1 ms a step of a 7-stage method): 4.5× the finest run of the
+"""The most steps of one 34-digit run (0.1-0.3 ms a step of a 7-stage method): 4.5× the finest run of the
 built-in methods (fine_rkn5, 4400 steps at kh 0.0016). A method of much lower order than it declares reaches it
 long before the floor and fails the check (``measure_exact_order``'s note says so)."""
 
@@ -97,8 +104,8 @@ def measure_exact_order(method: ExactMethod, model: Model, params: PendulumParam
     steps: list[float] = []
     errors: list[float] = []
     note = ""
-    with mpmath.workdps(DIGITS):
-        reference = [mpmath.mpf(str(value)) for value in final_state_in_quad(problem)[:2]]
+    with working_precision():
+        reference = [gmpy2.mpfr(str(value)) for value in final_state_in_quad(problem)[:2]]
         kh = UNDECLARED_LIMIT_START_KH
         while True:
             n_steps = math.ceil(k * duration / kh)
@@ -107,8 +114,8 @@ def measure_exact_order(method: ExactMethod, model: Model, params: PendulumParam
                 break
             try:
                 x, y = final_position(method, problem, n_steps)
-                error = float(mpmath.hypot(x - reference[0], y - reference[1])) / params.amplitude_m
-            except (TypeError, ValueError):  # a complex square root: the run left the sphere's domain
+                error = float(gmpy2.hypot(x - reference[0], y - reference[1])) / params.amplitude_m
+            except ValueError:  # gmpy2.InvalidOperationError: the run left the sphere's domain
                 error = math.inf
             steps.append(duration / n_steps)
             errors.append(error)
@@ -119,19 +126,26 @@ def measure_exact_order(method: ExactMethod, model: Model, params: PendulumParam
     return OrderMeasurement(np.array(steps), np.array(errors), order, note)
 
 
-def final_position(method: ExactMethod, problem: Problem, n_steps: int) -> tuple[mpmath.mpf, mpmath.mpf]:
-    """(x, y) after ``n_steps`` steps of the exact main method over the problem's span, in mpmath's current
-    precision: a Runge-Kutta tableau's c, A and b (HNW I, §II.1) or a general Runge-Kutta-Nyström pair's c, ā, a,
+def working_precision() -> gmpy2.context:
+    """The stepper's arithmetic, for a ``with`` block: ``PRECISION_BITS``, rounding to nearest, and an invalid
+    operation (``sqrt`` of a negative number) raising ``gmpy2.InvalidOperationError`` (a ``ValueError``) instead of
+    giving NaN."""
+    return gmpy2.context(precision=PRECISION_BITS, round=gmpy2.RoundToNearest, trap_invalid=True)
+
+
+def final_position(method: ExactMethod, problem: Problem, n_steps: int) -> tuple[gmpy2.mpfr, gmpy2.mpfr]:
+    """(x, y) after ``n_steps`` steps of the exact main method over the problem's span, in gmpy2's current
+    context (``working_precision``): a Runge-Kutta tableau's c, A and b (HNW I, §II.1) or a general Runge-Kutta-Nyström pair's c, ā, a,
     b̄ and b (HNW I, §II.14; ``integrators.rkn``). Every model is autonomous (``Model.acceleration`` has no t)."""
-    math_namespace = types.SimpleNamespace(sqrt=mpmath.sqrt, sin=mpmath.sin, cos=mpmath.cos)
-    p = [mpmath.mpf(float(value)) for value in problem.parameter_vector]
+    math_namespace = types.SimpleNamespace(sqrt=gmpy2.sqrt, sin=gmpy2.sin, cos=gmpy2.cos)
+    p = [gmpy2.mpfr(float(value)) for value in problem.parameter_vector]
     model = problem.model
 
     def acceleration(x, y, vx, vy) -> tuple:
         return model.acceleration(math_namespace, x, y, vx, vy, p)
 
-    h = mpmath.mpf(problem.t_end_s) / n_steps
-    state = [mpmath.mpf(float(value)) for value in problem.initial_state]
+    h = gmpy2.mpfr(problem.t_end_s) / n_steps
+    state = [gmpy2.mpfr(float(value)) for value in problem.initial_state]
     if isinstance(method, NystromPair):
         return _nystrom_steps(method, acceleration, state, h, n_steps)
     exact = method.exact
@@ -147,12 +161,12 @@ def final_position(method: ExactMethod, problem: Problem, n_steps: int) -> tuple
     return state[0], state[1]
 
 
-def _nystrom_steps(pair: NystromPair, acceleration: Callable, state: list, h: mpmath.mpf,
-                   n_steps: int) -> tuple[mpmath.mpf, mpmath.mpf]:
+def _nystrom_steps(pair: NystromPair, acceleration: Callable, state: list, h: gmpy2.mpfr,
+                   n_steps: int) -> tuple[gmpy2.mpfr, gmpy2.mpfr]:
     """``n_steps`` general RKN steps from ``state``: (x, y) at the end."""
     position_rows, velocity_rows = _sparse(pair.position), _sparse(pair.velocity)
     position_weights, velocity_weights = _sparse([pair.position_weights, pair.velocity_weights])
-    nodes = [_mpf(c) for c in pair.c]
+    nodes = [_rounded(c) for c in pair.c]
     h2 = h * h
     for _ in range(n_steps):
         stages: list[tuple] = []
@@ -165,16 +179,16 @@ def _nystrom_steps(pair: NystromPair, acceleration: Callable, state: list, h: mp
     return state[0], state[1]
 
 
-def _sparse(rows) -> list[list[tuple[int, mpmath.mpf]]]:
-    """Each row's non-zero entries as (column, value) in mpmath's current precision."""
-    return [[(j, _mpf(value)) for j, value in enumerate(row) if value] for row in rows]
+def _sparse(rows) -> list[list[tuple[int, gmpy2.mpfr]]]:
+    """Each row's non-zero entries as (column, value) in the current precision."""
+    return [[(j, _rounded(value)) for j, value in enumerate(row) if value] for row in rows]
 
 
-def _dot(row: list[tuple[int, mpmath.mpf]], stages: list[tuple], component: int) -> mpmath.mpf:
-    """Σⱼ rowⱼ · stagesⱼ[component] over the row's non-zero entries."""
-    return mpmath.fdot((value, stages[j][component]) for j, value in row)
+def _dot(row: list[tuple[int, gmpy2.mpfr]], stages: list[tuple], component: int) -> gmpy2.mpfr:
+    """Σⱼ rowⱼ · stagesⱼ[component] over the row's non-zero entries: the products rounded, their sum rounded once."""
+    return gmpy2.fsum([value * stages[j][component] for j, value in row])
 
 
-def _mpf(value: Fraction) -> mpmath.mpf:
-    """A rational to the nearest number of mpmath's current precision."""
-    return mpmath.mpf(value.numerator) / value.denominator
+def _rounded(value: Fraction) -> gmpy2.mpfr:
+    """A rational to the nearest number of the current precision."""
+    return gmpy2.mpfr(gmpy2.mpq(value.numerator, value.denominator))
