@@ -13,18 +13,20 @@ itself:
 * everywhere, a watchdog thread ends it within ``PARENT_POLL_S`` once its parent pid changes (the watchdog needs
   the GIL, so it is the fallback where prctl does not exist, or where the parent died before prctl took effect).
 
-**A pool's replacement workers get the watchdog only.** ``multiprocessing.Pool`` replaces a worker that died
-(a crash in a task) from its worker-handler thread, and that thread ends in ``Pool.terminate()``. With prctl the
-kernel would then kill the replacement, possibly while it waits for a task holding the pool's task-queue lock;
-``terminate()`` takes that lock and would wait for it forever (CPython issues #96062 and #78178: a pool worker
-killed holding the lock). So prctl is set only in a worker forked by the thread that made the pool
-(``forking_thread``).
+**Pools that never wait on their workers' locks.** The report's and the studies' pools are
+``concurrent.futures.ProcessPoolExecutor``. ``multiprocessing.Pool`` was used before and hung: its
+``terminate()`` kills the workers and then waits for them on locks they share with the pool's threads (a worker
+killed while sending a result holds the result queue's lock for ever, one killed while waiting for a task the task
+queue's: CPython issues #96062 and #78178). The executor's own threads only read what its workers write, and it
+never replaces a worker: one that dies breaks the pool, whose unfinished tasks then end with ``BrokenProcessPool``.
+``stop_pool`` stops one without killing anything: the tasks not yet started are cancelled, the running ones end,
+and nothing a worker writes comes after it returns.
 """
 
 from __future__ import annotations
 
+import concurrent.futures
 import multiprocessing.context
-import multiprocessing.pool
 import os
 import signal
 import sys
@@ -35,13 +37,10 @@ PARENT_POLL_S = 0.5
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
 
-def die_with_parent(parent_pid: int, forking_thread: int | None = None) -> None:
+def die_with_parent(parent_pid: int) -> None:
     """Arrange for this process to end when its parent, ``parent_pid``, does (see the module docstring); ends it
-    at once if that parent is already gone. ``forking_thread``: the ``threading.get_ident()`` of the parent's
-    thread that lives as long as the parent; a worker forked by another thread (a pool's replacement worker)
-    gets the watchdog only (module docstring). A forked child's only thread keeps the ident of the thread that
-    forked it."""
-    if sys.platform.startswith("linux") and forking_thread in (None, threading.get_ident()):
+    at once if that parent is already gone."""
+    if sys.platform.startswith("linux"):
         import ctypes
 
         try:
@@ -59,7 +58,18 @@ def die_with_parent(parent_pid: int, forking_thread: int | None = None) -> None:
     threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
 
 
-def worker_pool(context: multiprocessing.context.BaseContext, jobs: int) -> multiprocessing.pool.Pool:
-    """``jobs`` worker processes of ``context`` that end with this process (``die_with_parent``); create it from a
-    thread that lives as long as the process (the main thread)."""
-    return context.Pool(jobs, initializer=die_with_parent, initargs=(os.getpid(), threading.get_ident()))
+def worker_pool(context: multiprocessing.context.BaseContext, jobs: int) -> concurrent.futures.ProcessPoolExecutor:
+    """``jobs`` worker processes of ``context`` that end with this process (``die_with_parent``). With the fork
+    context the executor starts them all at the first ``submit``: submit from a thread that lives as long as the
+    process (the main thread). Stop it with ``stop_pool``."""
+    return concurrent.futures.ProcessPoolExecutor(jobs, mp_context=context, initializer=die_with_parent,
+                                                  initargs=(os.getpid(),))
+
+
+def stop_pool(pool: concurrent.futures.ProcessPoolExecutor, futures: list[concurrent.futures.Future]) -> None:
+    """Stop ``pool`` (module docstring): cancel those of its ``futures`` not yet started, wait for the others to
+    end (a running task is not interrupted), then shut it down."""
+    for future in futures:
+        future.cancel()
+    concurrent.futures.wait(futures)
+    pool.shutdown(wait=True, cancel_futures=True)

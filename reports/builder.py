@@ -12,9 +12,9 @@ again (``reports.figure_cache``): its blocks and static files are taken from tha
 
 from __future__ import annotations
 
+import concurrent.futures
 import multiprocessing
 import multiprocessing.context
-import multiprocessing.pool
 import queue
 from dataclasses import dataclass, field
 from functools import partial
@@ -26,7 +26,7 @@ from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS
 from matplotlib.figure import Figure as MplFigure
 from tqdm import tqdm
 
-from foucault_bench.bench.parent_death import worker_pool
+from foucault_bench.bench.parent_death import stop_pool, worker_pool
 from foucault_bench.reports import chart_style, interactive, plotly_conversion, tables
 from foucault_bench.reports.document import Block, Figure, Page, Paragraph, Table, display_frame, write_table_files
 from foucault_bench.reports.figure_cache import FigureCache, Unhashable, digest
@@ -146,8 +146,8 @@ class Builder:
         self._queued = 0  # pending[:_queued] are handed to workers (or reused from the cache)
         self._todo: list[_Pending] = []  # the tasks handed to workers, by their position in _PENDING
         self._done: queue.Queue[tuple[int, list[Block]] | BaseException] = queue.Queue()
-        self._pools: list[multiprocessing.pool.Pool] = []
-        self._background: multiprocessing.pool.Pool | None = None  # the one-worker pool of the last flush
+        self._pools: list[tuple[concurrent.futures.ProcessPoolExecutor, list[concurrent.futures.Future]]] = []
+        self._background: concurrent.futures.ProcessPoolExecutor | None = None  # the one-worker pool of the last flush
         self._unfinished = 0  # tasks handed to the background pool and not yet finished (no flush until 0)
 
     def page(self, file: str, title: str) -> Page:
@@ -217,9 +217,8 @@ class Builder:
         if not tasks:
             return
         if self._background is not None:
-            self._background.close()
+            self._background.shutdown(wait=False)  # its worker ends once its tasks are done
         self._background = worker_pool(context, 1)
-        self._pools.append(self._background)
         self._submit(self._background, tasks, background=True)
 
     def _take_queued(self) -> list[_Pending]:
@@ -239,19 +238,26 @@ class Builder:
         self._todo.extend(tasks)
         return tasks
 
-    def _submit(self, pool: multiprocessing.pool.Pool, tasks: list[_Pending], background: bool = False) -> None:
-        """Run ``tasks`` (the last ``len(tasks)`` of ``_PENDING``) on ``pool``; results reach ``_done``."""
+    def _submit(self, pool: concurrent.futures.ProcessPoolExecutor, tasks: list[_Pending],
+                background: bool = False) -> None:
+        """Run ``tasks`` (the last ``len(tasks)`` of ``_PENDING``) on ``pool``; results (or errors) reach
+        ``_done``."""
         first = len(_PENDING) - len(tasks)
 
-        def finished(result: tuple[int, list[Block]]) -> None:
+        def finished(future: concurrent.futures.Future) -> None:
+            if future.cancelled():
+                return
             if background:
                 self._unfinished -= 1
-            self._done.put(result)
+            error = future.exception()
+            self._done.put(future.result() if error is None else error)
 
         if background:
             self._unfinished += len(tasks)
-        for position in range(first, len(_PENDING)):
-            pool.apply_async(_do_pending, (position,), callback=finished, error_callback=self._done.put)
+        futures = [pool.submit(_do_pending, position) for position in range(first, len(_PENDING))]
+        self._pools.append((pool, futures))
+        for future in futures:
+            future.add_done_callback(finished)
 
     def draw_figures(self) -> None:
         """Do the queued work not yet handed out (charts not in the cache, table files) on ``jobs`` worker
@@ -274,9 +280,10 @@ class Builder:
 
     def close(self) -> None:
         """Stop the worker processes and forget the queued work (after ``draw_figures``, or when a section
-        failed)."""
-        for pool in self._pools:
-            pool.terminate()
+        failed): the tasks not yet started are cancelled, and this returns when the running ones have ended, so
+        that no worker writes into the folder afterwards (``bench.parent_death.stop_pool``)."""
+        for pool, futures in self._pools:
+            stop_pool(pool, futures)
         self._pools, self._background = [], None
         _PENDING.clear()
 
@@ -290,9 +297,7 @@ class Builder:
         jobs = min(self.jobs, len(tasks))
         here: list[int] = []  # positions done in this process, one at a time between the workers' results
         if jobs > 1 and context is not None:
-            pool = worker_pool(context, jobs)
-            self._pools.append(pool)
-            self._submit(pool, tasks)
+            self._submit(worker_pool(context, jobs), tasks)
         else:
             here = list(range(len(_PENDING) - len(tasks), len(_PENDING)))
         try:

@@ -4,8 +4,8 @@ processes while its caller goes on), ``ensure_studies`` waits for them all."""
 
 from __future__ import annotations
 
+import concurrent.futures
 import multiprocessing
-import multiprocessing.pool
 import queue
 from collections import Counter
 from collections.abc import Mapping
@@ -15,7 +15,7 @@ from typing import Any, Callable, Iterator, Protocol
 import pandas as pd
 from tqdm import tqdm
 
-from foucault_bench.bench.parent_death import worker_pool
+from foucault_bench.bench.parent_death import stop_pool, worker_pool
 from foucault_bench.bench.studies.energy import LongTimeEnergyConfig, long_time_energy, long_time_energy_parts
 from foucault_bench.bench.studies.long_time_roundoff import RoundoffConfig, roundoff_growth, roundoff_growth_parts
 from foucault_bench.bench.studies.precession import (
@@ -138,7 +138,8 @@ class StudyTables(Mapping[str, pd.DataFrame]):
                  for name, config in missing for index, part in enumerate(STUDIES[name].split(config))]
         self._pieces: dict[str, dict[int, pd.DataFrame]] = {name: {} for name, _ in missing}
         self._counts = Counter(name for name, _, _ in tasks)
-        self._pool: multiprocessing.pool.Pool | None = None
+        self._pool: concurrent.futures.ProcessPoolExecutor | None = None
+        self._futures: list[concurrent.futures.Future] = []
         self._arrived: queue.SimpleQueue[tuple[str, int, pd.DataFrame] | BaseException] = queue.SimpleQueue()
         self._bar: tqdm | None = None
         if jobs < 2 or len(tasks) < 2 or "fork" not in multiprocessing.get_all_start_methods():
@@ -147,8 +148,9 @@ class StudyTables(Mapping[str, pd.DataFrame]):
             return
         self._pool = worker_pool(multiprocessing.get_context("fork"), min(jobs, len(tasks)))
         self._bar = tqdm(total=len(tasks), desc="studies", unit="part", disable=not progress, leave=False)
-        for task in tasks:  # taken in this order by the workers as they come free
-            self._pool.apply_async(_compute_part, (task,), callback=self._arrive, error_callback=self._arrived.put)
+        self._futures = [self._pool.submit(_compute_part, task) for task in tasks]  # started in this order
+        for future in self._futures:
+            future.add_done_callback(self._arrive)
 
     def __getitem__(self, name: str) -> pd.DataFrame:
         if name not in STUDIES:
@@ -170,19 +172,27 @@ class StudyTables(Mapping[str, pd.DataFrame]):
         self.close()
 
     def close(self) -> None:
-        """Stop the worker processes (tables not yet computed stay missing)."""
+        """Stop the worker processes (tables not yet computed stay missing): the parts not yet started are
+        cancelled, and this returns when the running ones have ended (``bench.parent_death.stop_pool``)."""
         if self._pool is not None:
-            self._pool.terminate()
-            self._pool = None
+            stop_pool(self._pool, self._futures)
+            self._pool, self._futures = None, []
         if self._bar is not None:
             self._bar.close()
             self._bar = None
 
-    def _arrive(self, part: tuple[str, int, pd.DataFrame]) -> None:
-        """A part's table, in the pool's thread that receives results: counted on the bar, queued for this one."""
+    def _arrive(self, future: concurrent.futures.Future) -> None:
+        """A part's table (or its error), in the pool's thread that receives results: counted on the bar, queued
+        for this one."""
+        if future.cancelled():
+            return
+        error = future.exception()
+        if error is not None:
+            self._arrived.put(error)
+            return
         if self._bar is not None:
             self._bar.update()
-        self._arrived.put(part)
+        self._arrived.put(future.result())
 
     def _add(self, name: str, table: pd.DataFrame) -> None:
         table[STUDY_VERSION_COLUMN] = STUDIES[name].version
