@@ -62,8 +62,18 @@ def worker_pool(context: multiprocessing.context.BaseContext, jobs: int) -> conc
     """``jobs`` worker processes of ``context`` that end with this process (``die_with_parent``). With the fork
     context the executor starts them all at the first ``submit``: submit from a thread that lives as long as the
     process (the main thread). Stop it with ``stop_pool``."""
-    return concurrent.futures.ProcessPoolExecutor(jobs, mp_context=context, initializer=die_with_parent,
+    return concurrent.futures.ProcessPoolExecutor(jobs, mp_context=context, initializer=_start_pool_worker,
                                                   initargs=(os.getpid(),))
+
+
+def _start_pool_worker(parent_pid: int) -> None:
+    """A ``worker_pool`` process's first act: ``die_with_parent``, and SIGINT and SIGTERM ignored, as the run's
+    workers do (``bench.run.worker``): a Ctrl-C in a terminal reaches the whole process group, and the pool's
+    owner, interrupted, stops its workers itself (``stop_pool``: the tasks under way end, the others are
+    cancelled), with no traceback from a worker interrupted while it waited for a task."""
+    die_with_parent(parent_pid)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
 
 
 def stop_pool(pool: concurrent.futures.ProcessPoolExecutor, futures: list[concurrent.futures.Future]) -> None:

@@ -12,6 +12,8 @@ bytes repeatable), and the next run leaves no temporary folder behind.
 from __future__ import annotations
 
 import json
+import os
+import re
 import shutil
 import signal
 import subprocess
@@ -22,7 +24,9 @@ import pytest
 
 from foucault_bench.bench.atomic import MARKER, recover
 from foucault_bench.bench.cli import main as cli_main
-from output_fixtures import QUICK_ENVIRONMENT, alive, folder_digest, leftovers, quick_report_command, tiny_database
+from output_fixtures import (
+    QUICK_ENVIRONMENT, alive, folder_digest, leftovers, processes_running, quick_report_command, tiny_database,
+)
 
 pytestmark = pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="needs POSIX signals")
 
@@ -165,6 +169,45 @@ def test_a_kill_from_outside_while_building_leaves_the_old_report(killed_in_the_
     assert folder_digest(out) == place["old"]
     assert len(list(out.parent.glob(".report.building-*"))) == 1  # the killed build's staging folder, ignored
     recover(out)  # what the next run does first: the killed build's staging folder goes
+    assert folder_digest(out) == place["old"] and leftovers(out.parent) == []
+
+
+INTERRUPTIBLE_AND_SLOW = """
+import signal, time
+import foucault_bench.reports.builder as builder
+signal.signal(signal.SIGINT, signal.default_int_handler)  # a process started in the background may inherit it ignored
+_write_files = builder._write_files
+def slow_write_files(*arguments, **keywords):  # each table's files, then a pause: the workers are busy at the Ctrl-C
+    blocks = _write_files(*arguments, **keywords)
+    time.sleep(1.0)
+    return blocks
+builder._write_files = slow_write_files
+"""
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads process states from /proc")
+def test_ctrl_c_while_workers_write_ends_the_report_and_its_workers_and_keeps_the_old_one(place) -> None:
+    """A Ctrl-C reaches the whole process group while the workers write table files: the report exits with
+    status 130 and one line, no traceback (its workers ignore the signal; the report stops them, letting the
+    task under way end: ``bench.parent_death``), no process of it is left, and the old report is whole."""
+    out = old_report_at(place, "ctrl-c")
+    command = quick_report_command("--db", place["database"], "--out", out, "--studies", "skip", "--static",
+                                   *NEW_TARGETS, extra=INTERRUPTIBLE_AND_SLOW)
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                               env=QUICK_ENVIRONMENT, start_new_session=True)
+    try:
+        while process.poll() is None and not _staging_holds(out.parent, lambda staging: any(
+                (staging / "tables").glob("*.csv"))):
+            time.sleep(0.005)
+        os.killpg(process.pid, signal.SIGINT)
+    finally:
+        _, stderr = process.communicate(timeout=600)
+    assert process.returncode == 130, stderr[-2000:]
+    said = [line for line in re.split(r"[\r\n]", stderr) if line.strip() and not line.startswith("report figures")]
+    assert said == ["interrupted"], stderr[-2000:]  # before: "Process ForkPoolWorker-1:" (and its traceback)
+    assert processes_running(str(out)) == []
+    assert folder_digest(out) == place["old"]
+    recover(out)
     assert folder_digest(out) == place["old"] and leftovers(out.parent) == []
 
 
