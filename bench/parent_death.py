@@ -13,25 +13,30 @@ itself:
 * everywhere, a watchdog thread ends it within ``PARENT_POLL_S`` once its parent pid changes (the watchdog needs
   the GIL, so it is the fallback where prctl does not exist, or where the parent died before prctl took effect).
 
-**Pools that never wait on their workers' locks.** The report's and the studies' pools are
+**Pools stopped without killing.** The report's and the studies' pools are
 ``concurrent.futures.ProcessPoolExecutor``. ``multiprocessing.Pool`` was used before and hung: its
-``terminate()`` kills the workers and then waits for them on locks they share with the pool's threads (a worker
-killed while sending a result holds the result queue's lock for ever, one killed while waiting for a task the task
-queue's: CPython issues #96062 and #78178). The executor's own threads only read what its workers write, and it
-never replaces a worker: one that dies breaks the pool, whose unfinished tasks then end with ``BrokenProcessPool``.
-``stop_pool`` stops one without killing anything: the tasks not yet started are cancelled, the running ones end,
-and nothing a worker writes comes after it returns.
+``terminate()`` kills the workers and then waits on locks it shares with them (a worker killed while sending a
+result holds the result queue's lock for ever; CPython issues #96062 and #78178). The executor's threads never
+take the locks its workers take on the result queue, and it never replaces a worker: one that dies breaks the
+pool, whose unfinished tasks then end with ``BrokenProcessPool``, and the executor ends the other workers with
+SIGTERM. ``stop_pools`` stops pools without killing anything: every task not yet started is cancelled, those under
+way end, and nothing a worker writes comes after it returns. The workers ignore SIGINT (``_start_pool_worker``):
+a Ctrl-C reaches the whole process group, and the pools' owner, interrupted, stops them so; a second Ctrl-C while
+it waits kills them.
 """
 
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
+import multiprocessing
 import multiprocessing.context
 import os
 import signal
 import sys
 import threading
 import time
+from collections.abc import Iterator
 
 PARENT_POLL_S = 0.5
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
@@ -59,27 +64,67 @@ def die_with_parent(parent_pid: int) -> None:
 
 
 def worker_pool(context: multiprocessing.context.BaseContext, jobs: int) -> concurrent.futures.ProcessPoolExecutor:
-    """``jobs`` worker processes of ``context`` that end with this process (``die_with_parent``). With the fork
-    context the executor starts them all at the first ``submit``: submit from a thread that lives as long as the
-    process (the main thread). Stop it with ``stop_pool``."""
-    return concurrent.futures.ProcessPoolExecutor(jobs, mp_context=context, initializer=_start_pool_worker,
+    """``jobs`` worker processes of ``context`` that end with this process (``die_with_parent``), started here:
+    call it from a thread that lives as long as the process (the main thread). Stop it with ``stop_pools``.
+
+    With the fork context the executor forks its workers in the first ``submit``, then starts the thread that
+    will stop them; a Ctrl-C between the two would leave workers that nothing stops and that the interpreter
+    waits for at exit. So the first task, a no-op, is submitted here with Ctrl-C held back until it returns."""
+    pool = concurrent.futures.ProcessPoolExecutor(jobs, mp_context=context, initializer=_start_pool_worker,
                                                   initargs=(os.getpid(),))
+    with _ctrl_c_held_back():
+        pool.submit(int)
+    return pool
+
+
+@contextlib.contextmanager
+def _ctrl_c_held_back() -> Iterator[None]:
+    """A SIGINT received inside the block is delivered when it ends (in the main thread; elsewhere, as it comes)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    received: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: received.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if received:
+            signal.raise_signal(signal.SIGINT)
 
 
 def _start_pool_worker(parent_pid: int) -> None:
-    """A ``worker_pool`` process's first act: ``die_with_parent``, and SIGINT and SIGTERM ignored, as the run's
-    workers do (``bench.run.worker``): a Ctrl-C in a terminal reaches the whole process group, and the pool's
-    owner, interrupted, stops its workers itself (``stop_pool``: the tasks under way end, the others are
-    cancelled), with no traceback from a worker interrupted while it waited for a task."""
+    """A ``worker_pool`` process's first act: ``die_with_parent``, and SIGINT ignored, as the run's workers do
+    (``bench.run.worker``): a Ctrl-C in a terminal reaches the whole process group, and the pool's owner,
+    interrupted, stops its workers itself (``stop_pools``), with no traceback from a worker interrupted while it
+    waited for a task. SIGTERM keeps its default: it is how the executor ends the workers of a broken pool."""
     die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
 
 
-def stop_pool(pool: concurrent.futures.ProcessPoolExecutor, futures: list[concurrent.futures.Future]) -> None:
-    """Stop ``pool`` (module docstring): cancel those of its ``futures`` not yet started, wait for the others to
-    end (a running task is not interrupted), then shut it down."""
-    for future in futures:
-        future.cancel()
-    concurrent.futures.wait(futures)
-    pool.shutdown(wait=True, cancel_futures=True)
+CANCELLED_SEEN_S = 0.1
+"""How long ``stop_pools``, interrupted, lets the pools' threads take note of the cancelled tasks (they are woken
+for it, and it takes them well under a millisecond) before it kills the workers."""
+
+PoolTasks = tuple[concurrent.futures.ProcessPoolExecutor, list[concurrent.futures.Future]]
+"""A pool and the futures of the tasks submitted to it."""
+
+
+def stop_pools(pools: list[PoolTasks]) -> None:
+    """Stop ``pools`` (module docstring): first every task not yet started is cancelled, in every pool (nothing
+    here waits), then each pool's tasks under way are waited for (a running task is not interrupted) and the pool
+    is shut down, its workers ended. Interrupted while it waits (a second Ctrl-C), it kills this process's worker
+    processes (``multiprocessing.active_children``: the pools' workers) and lets the interrupt go on."""
+    under_way = [[future for future in futures if not future.cancel()] for _, futures in pools]
+    try:
+        for (pool, _), running in zip(pools, under_way, strict=True):
+            concurrent.futures.wait(running)  # not the cancelled: wait() counts them done only once the executor
+            pool.shutdown(wait=True, cancel_futures=True)  # has seen them, which a shut-down one may never do
+    except BaseException:  # a second Ctrl-C: the workers end now
+        for pool, _ in pools:  # first each pool's thread drops the cancelled tasks: if it saw its workers die
+            pool.shutdown(wait=False, cancel_futures=True)  # first, it would fail on them (Python 3.11)
+        with contextlib.suppress(KeyboardInterrupt):
+            time.sleep(CANCELLED_SEEN_S)
+        for child in multiprocessing.active_children():
+            child.kill()
+        raise

@@ -26,7 +26,7 @@ from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS
 from matplotlib.figure import Figure as MplFigure
 from tqdm import tqdm
 
-from foucault_bench.bench.parent_death import stop_pool, worker_pool
+from foucault_bench.bench.parent_death import PoolTasks, stop_pools, worker_pool
 from foucault_bench.reports import chart_style, interactive, plotly_conversion, tables
 from foucault_bench.reports.document import Block, Figure, Page, Paragraph, Table, display_frame, write_table_files
 from foucault_bench.reports.figure_cache import FigureCache, Unhashable, digest
@@ -146,7 +146,7 @@ class Builder:
         self._queued = 0  # pending[:_queued] are handed to workers (or reused from the cache)
         self._todo: list[_Pending] = []  # the tasks handed to workers, by their position in _PENDING
         self._done: queue.Queue[tuple[int, list[Block]] | BaseException] = queue.Queue()
-        self._pools: list[tuple[concurrent.futures.ProcessPoolExecutor, list[concurrent.futures.Future]]] = []
+        self._pools: list[PoolTasks] = []
         self._background: concurrent.futures.ProcessPoolExecutor | None = None  # the one-worker pool of the last flush
         self._unfinished = 0  # tasks handed to the background pool and not yet finished (no flush until 0)
 
@@ -217,7 +217,7 @@ class Builder:
         if not tasks:
             return
         if self._background is not None:
-            self._background.shutdown(wait=False)  # its worker ends once its tasks are done
+            self._background.shutdown(wait=True)  # its tasks are done (``_unfinished`` is 0): its worker ends now
         self._background = worker_pool(context, 1)
         self._submit(self._background, tasks, background=True)
 
@@ -254,10 +254,11 @@ class Builder:
 
         if background:
             self._unfinished += len(tasks)
-        futures = [pool.submit(_do_pending, position) for position in range(first, len(_PENDING))]
-        self._pools.append((pool, futures))
-        for future in futures:
-            future.add_done_callback(finished)
+        futures: list[concurrent.futures.Future] = []
+        self._pools.append((pool, futures))  # before the first submit forks the workers: close() stops them
+        for position in range(first, len(_PENDING)):
+            futures.append(pool.submit(_do_pending, position))
+            futures[-1].add_done_callback(finished)
 
     def draw_figures(self) -> None:
         """Do the queued work not yet handed out (charts not in the cache, table files) on ``jobs`` worker
@@ -281,11 +282,12 @@ class Builder:
     def close(self) -> None:
         """Stop the worker processes and forget the queued work (after ``draw_figures``, or when a section
         failed): the tasks not yet started are cancelled, and this returns when the running ones have ended, so
-        that no worker writes into the folder afterwards (``bench.parent_death.stop_pool``)."""
-        for pool, futures in self._pools:
-            stop_pool(pool, futures)
-        self._pools, self._background = [], None
-        _PENDING.clear()
+        that no worker writes into the folder afterwards (``bench.parent_death.stop_pools``)."""
+        pools, self._pools, self._background = self._pools, [], None
+        try:
+            stop_pools(pools)
+        finally:
+            _PENDING.clear()
 
     def _finish(self) -> None:
         tasks = self._take_queued()

@@ -15,7 +15,7 @@ from typing import Any, Callable, Iterator, Protocol
 import pandas as pd
 from tqdm import tqdm
 
-from foucault_bench.bench.parent_death import stop_pool, worker_pool
+from foucault_bench.bench.parent_death import stop_pools, worker_pool
 from foucault_bench.bench.studies.energy import LongTimeEnergyConfig, long_time_energy, long_time_energy_parts
 from foucault_bench.bench.studies.long_time_roundoff import RoundoffConfig, roundoff_growth, roundoff_growth_parts
 from foucault_bench.bench.studies.precession import (
@@ -148,9 +148,13 @@ class StudyTables(Mapping[str, pd.DataFrame]):
             return
         self._pool = worker_pool(multiprocessing.get_context("fork"), min(jobs, len(tasks)))
         self._bar = tqdm(total=len(tasks), desc="studies", unit="part", disable=not progress, leave=False)
-        self._futures = [self._pool.submit(_compute_part, task) for task in tasks]  # started in this order
-        for future in self._futures:
-            future.add_done_callback(self._arrive)
+        try:
+            for task in tasks:  # started in this order
+                self._futures.append(self._pool.submit(_compute_part, task))
+                self._futures[-1].add_done_callback(self._arrive)
+        except BaseException:  # a Ctrl-C after the first submit forked the workers
+            self.close()
+            raise
 
     def __getitem__(self, name: str) -> pd.DataFrame:
         if name not in STUDIES:
@@ -173,10 +177,10 @@ class StudyTables(Mapping[str, pd.DataFrame]):
 
     def close(self) -> None:
         """Stop the worker processes (tables not yet computed stay missing): the parts not yet started are
-        cancelled, and this returns when the running ones have ended (``bench.parent_death.stop_pool``)."""
+        cancelled, and this returns when the running ones have ended (``bench.parent_death.stop_pools``)."""
         if self._pool is not None:
-            stop_pool(self._pool, self._futures)
-            self._pool, self._futures = None, []
+            pool, futures, self._pool, self._futures = self._pool, self._futures, None, []
+            stop_pools([(pool, futures)])
         if self._bar is not None:
             self._bar.close()
             self._bar = None
@@ -187,12 +191,9 @@ class StudyTables(Mapping[str, pd.DataFrame]):
         if future.cancelled():
             return
         error = future.exception()
-        if error is not None:
-            self._arrived.put(error)
-            return
-        if self._bar is not None:
+        self._arrived.put(future.result() if error is None else error)  # first: a failing bar cannot lose it
+        if error is None and self._bar is not None:
             self._bar.update()
-        self._arrived.put(future.result())
 
     def _add(self, name: str, table: pd.DataFrame) -> None:
         table[STUDY_VERSION_COLUMN] = STUDIES[name].version
