@@ -80,8 +80,8 @@ def worker_pool(context: multiprocessing.context.BaseContext, jobs: int) -> conc
 @contextlib.contextmanager
 def _ctrl_c_held_back() -> Iterator[None]:
     """A SIGINT received inside the block is delivered when it ends (in the main thread; elsewhere, as it comes)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
+    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGINT) is None:
+        yield  # signal handlers are set in the main thread only; None: a handler not set from Python
         return
     received: list[int] = []
     previous = signal.signal(signal.SIGINT, lambda signum, frame: received.append(signum))
@@ -104,7 +104,7 @@ def _start_pool_worker(parent_pid: int) -> None:
 
 CANCELLED_SEEN_S = 0.1
 """How long ``stop_pools``, interrupted, lets the pools' threads take note of the cancelled tasks (they are woken
-for it, and it takes them well under a millisecond) before it kills the workers."""
+for it at once) before it kills the workers."""
 
 PoolTasks = tuple[concurrent.futures.ProcessPoolExecutor, list[concurrent.futures.Future]]
 """A pool and the futures of the tasks submitted to it."""
