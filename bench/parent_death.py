@@ -37,6 +37,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from typing import Any
 
 PARENT_POLL_S = 0.5
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
@@ -100,6 +101,13 @@ def _start_pool_worker(parent_pid: int) -> None:
     waited for a task. SIGTERM keeps its default: it is how the executor ends the workers of a broken pool."""
     die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def outcome(future: concurrent.futures.Future) -> Any:
+    """What a finished, not cancelled task gave: its result, or the exception it raised (``BrokenProcessPool``
+    when its pool broke), for a done-callback to pass on to the thread that waits for it."""
+    error = future.exception()
+    return future.result() if error is None else error
 
 
 CANCELLED_SEEN_S = 0.1

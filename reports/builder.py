@@ -26,7 +26,7 @@ from foucault_bench.bench.verdicts.pareto import DEFAULT_TARGETS
 from matplotlib.figure import Figure as MplFigure
 from tqdm import tqdm
 
-from foucault_bench.bench.parent_death import PoolTasks, stop_pools, worker_pool
+from foucault_bench.bench.parent_death import PoolTasks, outcome, stop_pools, worker_pool
 from foucault_bench.reports import chart_style, interactive, plotly_conversion, tables
 from foucault_bench.reports.document import Block, Figure, Page, Paragraph, Table, display_frame, write_table_files
 from foucault_bench.reports.figure_cache import FigureCache, Unhashable, digest
@@ -249,13 +249,12 @@ class Builder:
                 return
             if background:
                 self._unfinished -= 1
-            error = future.exception()
-            self._done.put(future.result() if error is None else error)
+            self._done.put(outcome(future))
 
         if background:
             self._unfinished += len(tasks)
         futures: list[concurrent.futures.Future] = []
-        self._pools.append((pool, futures))  # before the first submit forks the workers: close() stops them
+        self._pools.append((pool, futures))  # before its tasks: whatever happens below, close() stops it
         for position in range(first, len(_PENDING)):
             futures.append(pool.submit(_do_pending, position))
             futures[-1].add_done_callback(finished)

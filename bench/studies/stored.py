@@ -15,7 +15,7 @@ from typing import Any, Callable, Iterator, Protocol
 import pandas as pd
 from tqdm import tqdm
 
-from foucault_bench.bench.parent_death import stop_pools, worker_pool
+from foucault_bench.bench.parent_death import outcome, stop_pools, worker_pool
 from foucault_bench.bench.studies.energy import LongTimeEnergyConfig, long_time_energy, long_time_energy_parts
 from foucault_bench.bench.studies.long_time_roundoff import RoundoffConfig, roundoff_growth, roundoff_growth_parts
 from foucault_bench.bench.studies.precession import (
@@ -152,7 +152,7 @@ class StudyTables(Mapping[str, pd.DataFrame]):
             for task in tasks:  # started in this order
                 self._futures.append(self._pool.submit(_compute_part, task))
                 self._futures[-1].add_done_callback(self._arrive)
-        except BaseException:  # a Ctrl-C after the first submit forked the workers
+        except BaseException:  # a Ctrl-C among the submits: the parts queued so far are cancelled
             self.close()
             raise
 
@@ -190,9 +190,9 @@ class StudyTables(Mapping[str, pd.DataFrame]):
         for this one."""
         if future.cancelled():
             return
-        error = future.exception()
-        self._arrived.put(future.result() if error is None else error)  # first: a failing bar cannot lose it
-        if error is None and self._bar is not None:
+        arrived = outcome(future)
+        self._arrived.put(arrived)  # first: a failing bar cannot lose it
+        if not isinstance(arrived, BaseException) and self._bar is not None:
             self._bar.update()
 
     def _add(self, name: str, table: pd.DataFrame) -> None:
