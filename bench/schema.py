@@ -57,7 +57,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("energy_conserved", "INTEGER", "", "1 if the model conserves its energy (Jacobi) exactly, else 0"),
     Column("energy_max_rel_error", "REAL", "", "max over the output grid of |E − E₀|/(E₀ − E_rest), E_rest = energy of the bob at rest at the bottom"),
     Column("energy_drift_per_s", "REAL", "1/s", "least-squares slope of (E − E₀)/(E₀ − E_rest) against t"),
-    Column("energy_max_rel_error_steps", "REAL", "", "the same max over every step (streamed; fixed-step runs only)"),
+    Column("energy_max_rel_error_steps", "REAL", "", "the same max over every step (streamed; fixed-step runs of a matrix with step_energy = true)"),
     Column("precession_rate_rad_s", "REAL", "rad/s", "measured swing-plane rate, counter-clockwise about up positive"),
     Column("precession_rate_error", "REAL", "", "|rate − (−Ω_E sin φ)| / (Ω_E |sin φ|) (÷ Ω_E at the equator): relative to the local rate, large near the equator"),
     Column("precession_rate_error_rad_s", "REAL", "rad/s", "|rate − (−Ω_E sin φ)|"),

@@ -18,12 +18,14 @@ from foucault_bench.bench.perf.protocol_replay import replay, replayed_count
 from foucault_bench.bench.run.timing import TimingPolicy
 
 
-def _row(integrator: str, repeats_s: list[float], calibration_s: float = 0.01, ci95_rel: float | None = None) -> dict:
+def _row(integrator: str, repeats_s: list[float], calibration_s: float = 0.01, ci95_rel: float | None = None,
+         step_energy: float | None = None) -> dict:
     ordered = sorted(repeats_s)
     middle = len(ordered) // 2
     median_s = ordered[middle] if len(ordered) % 2 else (ordered[middle - 1] + ordered[middle]) / 2
     return dict(integrator=integrator, cpu_time_s=median_s, cpu_time_repeats_s=json.dumps(repeats_s),
-                calibration_cpu_s=calibration_s, cpu_time_ci95_rel=ci95_rel, compile_time_s=0.5)
+                calibration_cpu_s=calibration_s, cpu_time_ci95_rel=ci95_rel, compile_time_s=0.5,
+                energy_max_rel_error_steps=step_energy)
 
 
 def test_a_replayed_policy_stops_where_its_rule_would_have():
@@ -36,16 +38,18 @@ def test_a_replayed_policy_stops_where_its_rule_would_have():
 
 
 def test_the_replay_sums_the_stored_and_the_replayed_cpu():
-    """Two rows (a 30-ms rk4 run, a 10-ms cvode run): the runs once count rk4's monitored call (it streams step
-    metrics) and nothing for cvode (its warm-up over the first output interval is its compile time), the
+    """Three rows (a 30-ms rk4 run with its per-step energy error, a 20-ms rk4 run of a matrix with
+    ``step_energy = false``, a 10-ms cvode run): the runs once count the first rk4 run's monitored call and nothing
+    for the others (no monitored call; cvode's warm-up over the first output interval is its compile time), the
     repeats and the replayed prefixes sum as cut by hand."""
-    frame = pd.DataFrame([_row("rk4", [0.03] * 10, ci95_rel=0.0), _row("cvode_adams", [0.01] * 10, ci95_rel=0.0)])
+    frame = pd.DataFrame([_row("rk4", [0.03] * 10, ci95_rel=0.0, step_energy=1e-9),
+                          _row("rk4", [0.02] * 10, ci95_rel=0.0), _row("cvode_adams", [0.01] * 10, ci95_rel=0.0)])
     result = replay(frame, TimingPolicy(max_total_s=0.1))
     assert result["once_s"] == pytest.approx(0.03)
-    assert result["repeats_s"] == pytest.approx(0.3 + 0.1)
-    assert result["replayed_repeats_s"] == pytest.approx(4 * 0.03 + 6 * 0.01)
-    assert result["compile_s"] == pytest.approx(1.0)
-    assert (result["runs_of_10ms"], result["agree"], result["disagree"], result["beyond_stored"]) == (2, 2, 0, 0)
+    assert result["repeats_s"] == pytest.approx(0.3 + 0.2 + 0.1)
+    assert result["replayed_repeats_s"] == pytest.approx(4 * 0.03 + 5 * 0.02 + 6 * 0.01)
+    assert result["compile_s"] == pytest.approx(1.5)
+    assert (result["runs_of_10ms"], result["agree"], result["disagree"], result["beyond_stored"]) == (3, 3, 0, 0)
 
 
 def test_the_noise_comparison_counts_flags_and_ratios_by_the_rule():

@@ -298,6 +298,31 @@ def test_run_members_equals_one_by_one_runs() -> None:
         run_members([matrix.runs[0], parse_matrix({**TINY, "kh": [0.1]}, source="t").runs[0]], "m")
 
 
+def test_step_energy_false_leaves_out_only_the_per_step_energy_error() -> None:
+    """A matrix with ``step_energy = false`` makes no monitored call: its fixed-step rows, alone and in a batch,
+    hold no ``energy_max_rel_error_steps`` and every other verdict bit for bit as with the default, which holds a
+    finite per-step error; the two matrices hash differently (``--resume`` does not mix their rows)."""
+    from foucault_bench.bench.run.ensemble_jobs import configurations, run_members
+    from foucault_bench.bench.run.execute import execute_run
+
+    document = {**TINY, "integrators": ["verlet"], "kh": [0.2]}
+    with_steps, without = parse_matrix(document, source="t"), parse_matrix({**document, "step_energy": False}, source="t")
+    assert with_steps.step_energy and not without.step_energy and all(not spec.step_energy for spec in without.runs)
+    assert with_steps.matrix_hash != without.matrix_hash
+    for matrix in (with_steps, without):
+        (specs,) = configurations(matrix.runs[:2]).values()
+        rows = [*run_members(specs, "m"), execute_run(specs[0], "m")]
+        if matrix is with_steps:
+            reference_rows = rows
+            assert all(math.isfinite(row["energy_max_rel_error_steps"]) for row in rows)
+            continue
+        for row, reference in zip(rows, reference_rows, strict=True):
+            assert row["status"] == reference["status"] == "ok" and row["energy_max_rel_error_steps"] is None
+            for column in VERDICT_COLUMNS:
+                if column != "energy_max_rel_error_steps":
+                    assert same(row[column], reference[column]), column
+
+
 def rows_alone(matrix) -> dict[str, dict]:
     """Every run of ``matrix`` alone (``execute_run``, as the runner ran runs before batches), by run key."""
     from foucault_bench.bench.run.execute import execute_run

@@ -75,6 +75,8 @@ CASES = {
                              ["heyoka_taylor_quad computes the references"]),
     "unknown integrators form": ('scenes = ["seed_2min"]\nintegrators = "builtin"\nkh = [0.1]',
                                  ["integrators: unknown form 'builtin'", "did you mean 'built-in'"]),
+    "step_energy not a boolean": ('scenes = ["seed_2min"]\nintegrators = ["rk4"]\nkh = [0.1]\nstep_energy = "no"',
+                                  ["step_energy must be true or false", "'no'"]),
     "unreadable TOML": ('scenes = ["seed_2min"]\nintegrators = ["rk4"\nkh = [0.1]', ["not valid TOML", "line 3"]),
     "unimportable plug-in": ('plugins = ["no_such_module_here"]\nscenes = ["seed_2min"]\nintegrators = ["rk4"]\nkh = [0.1]',
                              ["plugins: cannot import 'no_such_module_here'"]),

@@ -6,7 +6,8 @@
 From the rows of one matrix run (``cpu_time_repeats_s``: the timed repeats' CPU times in the order measured):
 
 * **where the CPU went**, core-seconds summed over the rows: the runs once (the monitored call of the
-  integrators that stream step metrics), the timed repeats, and the warm-up over the first output interval
+  integrators that stream step metrics, counted in the rows that hold what it streams,
+  ``energy_max_rel_error_steps``: none in a matrix with ``step_energy = false``), the timed repeats, and the warm-up over the first output interval
   (``compile_time_s``: compilation or cache loads). Rows measured before 2026-12-02 also spent a whole warm-up
   run each, one ``cpu_time_s``, which this breakdown does not count;
 * **a replay of another policy** (``bench.run.timing.TimingPolicy``, the options above; the others keep the
@@ -50,13 +51,9 @@ def replayed_count(repeats_s: list[float], policy: TimingPolicy) -> int | None:
 
 
 def _once_s(row: Any) -> float:
-    from foucault_bench.integrators import get_integrator
-
-    try:
-        streams = get_integrator(str(row["integrator"])).streams_step_metrics
-    except KeyError:  # a plug-in's integrator: its module is not imported here
-        streams = False
-    return float(row["cpu_time_s"]) if streams else 0.0
+    """The CPU time of the row's untimed monitored call: one run's cost where the row holds the per-step energy
+    error that call streams (``energy_max_rel_error_steps``), none elsewhere."""
+    return 0.0 if pd.isna(row.get("energy_max_rel_error_steps")) else float(row["cpu_time_s"])
 
 
 def replay(frame: pd.DataFrame, policy: TimingPolicy) -> dict[str, Any]:

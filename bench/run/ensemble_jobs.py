@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any, Iterable, cast
 from foucault_bench.bench.run.calibration import calibration_chunk_cpu_s, scaled_calibration_s
 from foucault_bench.bench.run.execute import (
     COUNTERS, NOT_DETERMINISTIC, STATUS_FAILED, STATUS_OK, base_row, check_solution, execute_run, import_plugins,
+    monitored_call,
 )
 from foucault_bench.bench.run.timing import Timing, limit_threads, peak_rss_mb, time_repeated
 from foucault_bench.bench.run.worker import describe
@@ -128,7 +129,7 @@ def _timed_batch(specs: list[RunSpec]) -> tuple[tuple[list, list, list], Timing 
                                         calibrate=calibration_chunk_cpu_s, warm_up=warm_up)
     if timing is None:
         return (timed, timed, timed), None
-    first = solve(True) if integrator.streams_step_metrics else timed  # untimed: + per-step metrics
+    first = solve(True) if monitored_call(integrator, spec) else timed  # untimed: + per-step metrics
     return (first, timed, last), timing
 
 

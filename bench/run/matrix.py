@@ -11,6 +11,7 @@ A matrix file (read with ``tomllib``) looks like this (bench/README.md "Benchmar
     plugins = ["my_package.my_integrator"]  # modules imported first (they register integrators)
 
     release_azimuth_deg = [0, 45, 90]     # optional: every scene once per release azimuth (scene "NAME-az45")
+    step_energy = false                   # optional (default true): no per-step energy error (below)
 
     [scene.lab]                           # an inline scene, read by bench.problems.scene_reader
     model = "linear"
@@ -36,6 +37,12 @@ double-precision unit roundoff (no double-precision integrator can meet it; ``be
 scene made by ``release_azimuth_deg`` are named with ``azimuth_label``, which keeps distinct azimuths distinct;
 no two scenes of a matrix may share a name, and none may have more than ``MAX_SCENE_NAME_LENGTH`` characters
 (``bench.problems.scene``: what a report's file names fit).
+
+``step_energy`` (default ``true``): every fixed-step run also makes one untimed call with ``monitor=True``, which
+streams the energy error of every step (column ``energy_max_rel_error_steps``; the grid's energy error,
+``energy_max_rel_error``, is in every row either way). That call integrates the run once more: with ``false``
+the column is NULL and the matrix costs that much less (the default matrix: about 50 s of CPU of its ~340 s,
+bench/PERF.md "The per-step energy error made optional").
 
 Plug-ins (``plugins``) are Python modules: importing one runs its code. They are imported only once the rest
 of the matrix is valid, and each must register at least one integrator.
@@ -65,7 +72,7 @@ __all__ = ["DEFAULT_RUN_TIMEOUT_S", "code_version", "MAX_OUTPUT_POINTS", "MAX_RU
            "built_in_matrices", "load_matrix", "parse_matrix", "with_run_timeout"]
 
 TOP_LEVEL_KEYS = ("name", "description", "scenes", "scene", "release_azimuth_deg", "integrators", "kh", "tol",
-                  "override", "plugins", "timing")
+                  "override", "plugins", "timing", "step_energy")
 RUN_TIMEOUT_KEY = "run_timeout_s"
 TIMING_KEYS = (*(field.name for field in dataclasses.fields(TimingPolicy)), RUN_TIMEOUT_KEY)
 DEFAULT_RUN_TIMEOUT_S = 600.0
@@ -87,11 +94,13 @@ class Matrix:
     plugins: tuple[str, ...]
     timing: TimingPolicy
     run_timeout_s: float = DEFAULT_RUN_TIMEOUT_S
+    step_energy: bool = True
 
     @functools.cached_property
     def matrix_hash(self) -> str:
-        """Hash of the name, every run key and the timing policy: equal hashes mean the same work."""
-        return digest([self.name, sorted(run.run_key for run in self.runs), dataclasses.asdict(self.timing)])
+        """Hash of the name, every run key, the timing policy and ``step_energy``: equal hashes mean the same work."""
+        return digest([self.name, sorted(run.run_key for run in self.runs), dataclasses.asdict(self.timing),
+                       self.step_energy])
 
 
 def built_in_matrices() -> list[str]:
@@ -177,7 +186,11 @@ def _validate(document: dict[str, Any], source: str, default_name: str, known_la
     scenes = release_azimuth_variants(scene_list(document, problem), document.get("release_azimuth_deg"), problem)
     check_names(scenes, problem)
     timing, run_timeout_s = _timing(document.get("timing", {}), problem)
-    runs = matrix_runs(document, scenes, plugins, timing, problem, known_later)
+    step_energy = document.get("step_energy", True)
+    if not isinstance(step_energy, bool):
+        problem(f"step_energy must be true or false, got {short_repr(step_energy)}")
+        step_energy = True
+    runs = matrix_runs(document, scenes, plugins, timing, problem, known_later, step_energy)
     if problems:
         raise InputError(problems)
     if known_later:
@@ -191,6 +204,7 @@ def _validate(document: dict[str, Any], source: str, default_name: str, known_la
         plugins=tuple(plugins),
         timing=timing,
         run_timeout_s=run_timeout_s,
+        step_energy=step_energy,
     )
 
 

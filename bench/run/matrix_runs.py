@@ -48,6 +48,9 @@ class RunSpec:
     timing: TimingPolicy
     code_version: str
     declared: tuple[tuple[str, Any], ...] = ()
+    step_energy: bool = True
+    """Whether a fixed-step run also makes its untimed monitored call for the per-step energy error
+    (``energy_max_rel_error_steps``; the matrix's ``step_energy``, ``bench.run.matrix``)."""
     """The columns a row takes from the matrix as (results column, value) pairs: the integrator's declared facts
     (``bench.schema.declared_facts``) and, for an ensemble member, its ensemble and swept values
     (``bench.problems.ensemble.member_columns``)."""
@@ -109,7 +112,7 @@ def read_sweep(value: Any, key: str, where: str, problem) -> list[float]:
 
 
 def runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timing: TimingPolicy,
-          problem, known_later: bool = False) -> list[RunSpec]:
+          problem, known_later: bool = False, step_energy: bool = True) -> list[RunSpec]:
     from foucault_bench.integrators import REGISTRY  # imported here: plugins must be imported first
 
     names = integrator_names(document, problem)
@@ -189,6 +192,7 @@ def runs(document: dict[str, Any], scenes: list[Scene], plugins: list[str], timi
                     timing=timing,
                     code_version=ensemble_code if scene.ensemble else code,
                     declared=declared + member_columns(scene, setting_label(kh, tol)),
+                    step_energy=step_energy,
                 ))
     for key in shared:
         if key not in used and integrators:
