@@ -113,6 +113,12 @@ VERDICT_COLUMNS: tuple[str, ...] = (
     "semi_minor_axis_ref_error",
 )
 """Accuracy columns: deterministic, identical bit for bit for the same matrix on the same machine."""
+OPTIONAL_VERDICT_COLUMNS: dict[str, str] = {
+    "energy_max_rel_error_steps": "streamed by the fixed-step loops only, in matrices with step_energy = true",
+}
+"""Verdict columns a matrix may leave out (``step_energy = false``, ``bench.run.matrix``) → where they are
+computed. Comparisons of two runs (``results --compare``, ``history``, ``check --baseline``) compare them only
+where both rows hold a value: NULL on one side is the matrix's choice, not a change of the code."""
 
 DECLARED_FACTS: dict[str, str] = {
     "family": "family",

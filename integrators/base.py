@@ -184,7 +184,8 @@ class Integrator(ABC):
         streams_step_metrics: ``True`` if ``solve(monitor=True)`` streams verdict ingredients that the output
             grid cannot give (``StreamedMetrics.energy_max_rel_error`` over every step). The runner times
             ``monitor=False`` calls for every integrator, so that the timed work is the same for all (integrate
-            to the output grid), and makes one extra untimed ``monitor=True`` call only where this is ``True``.
+            to the output grid), and makes one extra untimed ``monitor=True`` call only where this is ``True``
+            (and the matrix keeps ``step_energy = true``, its default).
         silence_native_output: ``solve`` redirects the process's stdout and stderr while the integrator runs
             (``quiet_native_output``: a few µs per call), for libraries that print (SUNDIALS); ``False`` for
             one that reports only through return values.

@@ -310,6 +310,18 @@ def test_missing_value_fails_and_margins_follow_the_bound_direction():
     assert headroom("min", 4.0, 3.5) == (pytest.approx(4.0 / 3.5), True)
 
 
+def test_a_bound_on_a_column_the_matrix_left_out_says_where_that_column_is_computed():
+    """A bound on ``energy_max_rel_error_steps`` over a row without it (a matrix with ``step_energy = false``)
+    fails and says that the column needs ``step_energy = true``; another missing column says only that nothing was
+    measured."""
+    frame = pd.DataFrame([made_up_row(integrator="rk4", kh=0.1, step_s=0.1)])
+    left_out, missing = evaluate(made_up_thresholds(
+        {"integrator": "rk4", "column": "energy_max_rel_error_steps", "max": 1.0},
+        {"integrator": "rk4", "column": "reference_error", "max": 1.0}), frame)
+    assert not left_out.passed and "step_energy = true" in left_out.detail
+    assert not missing.passed and missing.detail == "no finite value measured"
+
+
 def test_order_is_fitted_on_error_columns_only():
     with pytest.raises(InputError, match="cannot take a min_order bound"):
         made_up_thresholds({"integrator": "rk4", "column": "energy_drift_per_s", "min_order": 4})

@@ -19,13 +19,13 @@ from foucault_bench.bench.run.timing import TimingPolicy
 
 
 def _row(integrator: str, repeats_s: list[float], calibration_s: float = 0.01, ci95_rel: float | None = None,
-         step_energy: float | None = None) -> dict:
+         steps_energy_error: float | None = None) -> dict:
     ordered = sorted(repeats_s)
     middle = len(ordered) // 2
     median_s = ordered[middle] if len(ordered) % 2 else (ordered[middle - 1] + ordered[middle]) / 2
     return dict(integrator=integrator, cpu_time_s=median_s, cpu_time_repeats_s=json.dumps(repeats_s),
                 calibration_cpu_s=calibration_s, cpu_time_ci95_rel=ci95_rel, compile_time_s=0.5,
-                energy_max_rel_error_steps=step_energy)
+                energy_max_rel_error_steps=steps_energy_error)
 
 
 def test_a_replayed_policy_stops_where_its_rule_would_have():
@@ -42,7 +42,7 @@ def test_the_replay_sums_the_stored_and_the_replayed_cpu():
     ``step_energy = false``, a 10-ms cvode run): the runs once count the first rk4 run's monitored call and nothing
     for the others (no monitored call; cvode's warm-up over the first output interval is its compile time), the
     repeats and the replayed prefixes sum as cut by hand."""
-    frame = pd.DataFrame([_row("rk4", [0.03] * 10, ci95_rel=0.0, step_energy=1e-9),
+    frame = pd.DataFrame([_row("rk4", [0.03] * 10, ci95_rel=0.0, steps_energy_error=1e-9),
                           _row("rk4", [0.02] * 10, ci95_rel=0.0), _row("cvode_adams", [0.01] * 10, ci95_rel=0.0)])
     result = replay(frame, TimingPolicy(max_total_s=0.1))
     assert result["once_s"] == pytest.approx(0.03)

@@ -306,7 +306,8 @@ def test_step_energy_false_leaves_out_only_the_per_step_energy_error() -> None:
     from foucault_bench.bench.run.execute import execute_run
 
     document = {**TINY, "integrators": ["verlet"], "kh": [0.2]}
-    with_steps, without = parse_matrix(document, source="t"), parse_matrix({**document, "step_energy": False}, source="t")
+    with_steps = parse_matrix(document, source="t")
+    without = parse_matrix({**document, "step_energy": False}, source="t")
     assert with_steps.step_energy and not without.step_energy and all(not spec.step_energy for spec in without.runs)
     assert with_steps.matrix_hash != without.matrix_hash
     for matrix in (with_steps, without):

@@ -242,3 +242,13 @@ def test_a_variant_whose_release_lifts_the_bob_to_the_pivot_is_refused_naming_it
                       "integrators": ["rk4"], "kh": [0.2], "release_azimuth_deg": [90, 0]}, source="m")
     (problem,) = caught.value.problems
     assert problem.startswith("m: release_azimuth_deg = 0 of scene 'lab': release_velocity_m_s = ")
+
+
+def test_only_the_main_job_leaves_out_the_per_step_energy_error():
+    """The `default` matrix says ``step_energy = false`` (its report does not draw that column, bench/PERF.md
+    "The per-step energy error made optional"), and so do all its runs; the other built-in matrices keep the
+    default, true."""
+    for name in built_in_matrices():
+        matrix = load_matrix(name)
+        assert matrix.step_energy == (name != "default"), name
+        assert {run.step_energy for run in matrix.runs} == {matrix.step_energy}, name

@@ -133,3 +133,38 @@ def test_mismatched_values_are_printed_exactly_and_unmatched_runs_name_their_sid
     first, last = MATRIX.runs[0], MATRIX.runs[-1]
     assert f"only in A: {first.scene.name} {first.integrator} kh={first.kh!r}" in out
     assert f"only in B: {last.scene.name} {last.integrator} tol={last.tol!r}" in out
+
+
+def test_a_column_a_matrix_left_out_is_compared_only_where_both_runs_hold_it(tmp_path):
+    """``energy_max_rel_error_steps`` (left out by a matrix with ``step_energy = false``): A holds it in every run;
+    B leaves it out of run 0, holds A's value in run 1 and one ulp more in run 2. ``results --compare`` and the
+    revision comparison (``history``, ``check --baseline``) report run 2 only; a NULL where the other side holds
+    a value in any other accuracy column is still a change."""
+    from foucault_bench.bench.history.changes import accuracy_changes
+
+    column = "energy_max_rel_error_steps"
+
+    def holds_it(index, row):
+        row[column] = 1e-6 * (index + 1)
+        return row
+
+    def left_out_or_changed(index, row):
+        row = holds_it(index, row)
+        if index == 0:
+            row.update({column: None})
+        elif index == 2:
+            row[column] = float(np.nextafter(row[column], 1.0))
+        return row
+
+    with ResultsStore(tmp_path / "db.sqlite") as store:
+        runs = list(enumerate(MATRIX.runs))[:3]
+        frame_a = store.frame(_matrix_run(store, runs, change=holds_it)).set_index("run_key")
+        frame_b = store.frame(_matrix_run(store, runs, change=left_out_or_changed)).set_index("run_key")
+    mismatches, _, _ = compare_runs(frame_a.reset_index(), frame_b.reset_index())
+    changed_runs = [run for run in mismatches.loc[mismatches["column"] == column, "run"]]
+    assert len(changed_runs) == 1 and f"kh={MATRIX.runs[2].kh!r}" in changed_runs[0], mismatches
+    changes = [accuracy_changes(frame_a.loc[run.run_key].to_dict(), frame_b.loc[run.run_key].to_dict())
+               for _, run in runs]
+    assert changes == [[], [], [column]]
+    before = frame_a.loc[MATRIX.runs[0].run_key].to_dict()
+    assert accuracy_changes(before, {**before, "energy_max_rel_error": None}) == ["energy_max_rel_error"]

@@ -119,12 +119,12 @@ def search(store: ResultsStore, scene: Scene, target: Target, runs: pd.DataFrame
                 continue
             specs.append(RunSpec(scene=scene, integrator=probe.integrator, kh=None if probe.adaptive else setting,
                                  tol=setting if probe.adaptive else None, plugins=(), timing=timing,
-                                 code_version=code))
+                                 code_version=code, step_energy=False))  # no target uses the per-step energy
         if not specs:
             break
         matrix = Matrix(name=f"advise-{scene.name}", description=f"advise search for {target.metric} <= "
                         f"{target.value:g}, round {round_number + 1}", source="foucault-bench advise",
-                        scenes=(scene,), runs=tuple(specs), plugins=(), timing=timing)
+                        scenes=(scene,), runs=tuple(specs), plugins=(), timing=timing, step_energy=False)
         matrix_id = run_matrix(matrix, store, executor=make_executor(jobs), progress=progress)
         matrix_ids.append(matrix_id)
         planned += len(specs)

@@ -16,7 +16,7 @@ import pandas as pd
 
 from foucault_bench.bench.gate.select import as_float, counterpart_row, select_rows
 from foucault_bench.bench.gate.thresholds import UPPER_BOUNDS, Bound, Thresholds
-from foucault_bench.bench.schema import setting_label
+from foucault_bench.bench.schema import OPTIONAL_VERDICT_COLUMNS, setting_label
 
 
 @dataclass(frozen=True)
@@ -101,7 +101,9 @@ def evaluate(thresholds: Thresholds, frame: pd.DataFrame) -> list[Outcome]:
 def _numeric_outcome(bound: Bound, scene: str, integrator: str, setting: str, value: float,
                      detail: str) -> Outcome:
     if not math.isfinite(value):
-        detail = "; ".join(filter(None, [detail, "no finite value measured"]))
+        where = OPTIONAL_VERDICT_COLUMNS.get(bound.column or "")  # a column computed only where a matrix asks
+        missing = f"no finite value measured ({bound.column}: {where})" if where else "no finite value measured"
+        detail = "; ".join(filter(None, [detail, missing]))
         return Outcome(bound, scene, integrator, setting, value, None, False, detail)
     limit = cast(float, bound.limit)  # a number for every kind but status
     margin, is_factor = headroom(bound.kind, value, limit)

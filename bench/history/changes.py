@@ -5,7 +5,8 @@ integrator, the exact setting), whatever the code version that made them.
 
 * **Accuracy** (``ACCURACY_COLUMNS``: the status, the verdicts, the counts): a change is any difference of the bits
   (``bench.run.store``'s bitwise identity; NaN equals NaN), because these columns are deterministic for one
-  matrix on one machine. Between two machines (another CPU model on the two sides) the compiled code of numba
+  matrix on one machine (a column a matrix may leave out, ``bench.schema.OPTIONAL_VERDICT_COLUMNS``, is compared
+  only where both rows hold it). Between two machines (another CPU model on the two sides) the compiled code of numba
   and heyoka (LLVM, tuned to the host CPU) may round differently, so real-valued columns there count as changed
   only beyond ``CROSS_MACHINE_RELATIVE`` of the larger value or ``CROSS_MACHINE_ABSOLUTE`` (a round-off level
   of the relative errors); counts and statuses stay exact. Both tolerances are choices stated here, not
@@ -45,7 +46,7 @@ import pandas as pd
 from foucault_bench.bench.errors import InputError
 from foucault_bench.bench.history.revisions import Revision
 from foucault_bench.bench.run.compare import DETERMINISTIC_COLUMNS, run_identity
-from foucault_bench.bench.schema import setting_label
+from foucault_bench.bench.schema import OPTIONAL_VERDICT_COLUMNS, setting_label
 
 ACCURACY_COLUMNS: tuple[str, ...] = tuple(column for column in DETERMINISTIC_COLUMNS if column not in ("kh", "tol"))
 """The columns compared bit for bit (the setting itself is part of what a run is)."""
@@ -125,6 +126,8 @@ def identical(before: Any, after: Any) -> bool:
 def _same(column: str, before: Any, after: Any, *, cross_machine: bool) -> bool:
     if identical(before, after):
         return True
+    if column in OPTIONAL_VERDICT_COLUMNS and (_missing(before) or _missing(after)):
+        return True  # left out by one side's matrix (step_energy = false): nothing to compare
     if not cross_machine or column in INTEGER_COLUMNS:
         return False
     try:

@@ -7,9 +7,9 @@ From the rows of one matrix run (``cpu_time_repeats_s``: the timed repeats' CPU 
 
 * **where the CPU went**, core-seconds summed over the rows: the runs once (the monitored call of the
   integrators that stream step metrics, counted in the rows that hold what it streams,
-  ``energy_max_rel_error_steps``: none in a matrix with ``step_energy = false``), the timed repeats, and the warm-up over the first output interval
-  (``compile_time_s``: compilation or cache loads). Rows measured before 2026-12-02 also spent a whole warm-up
-  run each, one ``cpu_time_s``, which this breakdown does not count;
+  ``energy_max_rel_error_steps``: none in a matrix with ``step_energy = false``), the timed repeats, and the
+  warm-up over the first output interval (``compile_time_s``: compilation or cache loads). Rows measured before
+  2026-12-02 also spent a whole warm-up run each, one ``cpu_time_s``, which this breakdown does not count;
 * **a replay of another policy** (``bench.run.timing.TimingPolicy``, the options above; the others keep the
   stored run's values): its stopping rule (``bench.run.timing.stop_repeating``) applied to the prefixes of each
   row's stored repeats. A policy that stops no later than the stored one is replayed exactly: the same

@@ -9,7 +9,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from foucault_bench.bench.problems.scene_key import UNKNOWN_KEY_LABEL, scene_labels
-from foucault_bench.bench.schema import VERDICT_COLUMNS
+from foucault_bench.bench.schema import OPTIONAL_VERDICT_COLUMNS, VERDICT_COLUMNS
 
 if TYPE_CHECKING:  # pandas is imported by the functions that use it, not at start-up
     import pandas as pd
@@ -72,7 +72,8 @@ def compare_runs(frame_a: pd.DataFrame, frame_b: pd.DataFrame
     exact setting).
 
     Returns (mismatches, costs, unmatched): one mismatch line per differing deterministic column of a row
-    (``DETERMINISTIC_COLUMNS``; must be empty for the same matrix and code on the same machine), the costs of A
+    (``DETERMINISTIC_COLUMNS``; must be empty for the same matrix and code on the same machine; a column a
+    matrix may leave out, ``OPTIONAL_VERDICT_COLUMNS``, only where both rows hold it), the costs of A
     and B and their ratio B/A per row (``<cost>_a``, ``<cost>_b``, ``<cost>_ratio_b_over_a``), and the runs
     present in only one of the two as (side ``"A"`` or ``"B"``, run), sorted. A ratio is given only where both
     costs are finite and positive: a compile time of 0 or below (nothing compiled, or a cached compile: the
@@ -90,6 +91,8 @@ def compare_runs(frame_a: pd.DataFrame, frame_b: pd.DataFrame
     mismatches = []
     for column in DETERMINISTIC_COLUMNS:
         equal = _bits_equal(merged[f"{column}_a"], merged[f"{column}_b"])
+        if column in OPTIONAL_VERDICT_COLUMNS:  # left out by one side's matrix: nothing to compare
+            equal |= merged[f"{column}_a"].isna() | merged[f"{column}_b"].isna()
         mismatches += [{"run": run, "column": column, "a": a, "b": b}
                        for run, a, b in zip(merged["run"][~equal], merged[f"{column}_a"][~equal],
                                             merged[f"{column}_b"][~equal], strict=True)]

@@ -11,7 +11,8 @@ members' order, each with the member's own reference and verdicts:
   the protocol of ``bench.run.timing``: a warm-up over the members' first output interval, then timed repeats
   of the whole batch under the matrix's ``[timing]`` policy (its ``max_total_s`` caps the batch's repeats, not
   each member's). The first repeat's solutions are the members' results; integrators that stream per-step
-  metrics make one untimed ``monitor=True`` batch call, as a run alone does.
+  metrics make one untimed ``monitor=True`` batch call, as a run alone does (unless the matrix says
+  ``step_energy = false``).
 * **Cost shares.** A member's cost columns are its batch's divided by the batch's members (``share_columns``):
   ``cpu_time_s``, ``wall_time_s``, their spreads, the repeats' CPU times and ``compile_time_s``; the relative
   precision ``cpu_time_ci95_rel``, ``repeats`` and the machine calibration are the batch's. ``batch_members``
@@ -38,7 +39,7 @@ from typing import TYPE_CHECKING, Any, Iterable, cast
 from foucault_bench.bench.run.calibration import calibration_chunk_cpu_s, scaled_calibration_s
 from foucault_bench.bench.run.execute import (
     COUNTERS, NOT_DETERMINISTIC, STATUS_FAILED, STATUS_OK, base_row, check_solution, execute_run, import_plugins,
-    monitored_call,
+    makes_monitored_call,
 )
 from foucault_bench.bench.run.timing import Timing, limit_threads, peak_rss_mb, time_repeated
 from foucault_bench.bench.run.worker import describe
@@ -129,7 +130,7 @@ def _timed_batch(specs: list[RunSpec]) -> tuple[tuple[list, list, list], Timing 
                                         calibrate=calibration_chunk_cpu_s, warm_up=warm_up)
     if timing is None:
         return (timed, timed, timed), None
-    first = solve(True) if monitored_call(integrator, spec) else timed  # untimed: + per-step metrics
+    first = solve(True) if makes_monitored_call(integrator, spec) else timed  # untimed: + per-step metrics
     return (first, timed, last), timing
 
 

@@ -12,7 +12,7 @@ value and never raises:
   (``bench.verdicts.columns.compute_verdicts``). Integrators that stream a verdict ingredient the grid cannot
   give (``Integrator.streams_step_metrics``: the fixed-step loops' per-step energy error) make one extra,
   untimed ``monitor=True`` call, whose states must equal the timed ones, unless the matrix says
-  ``step_energy = false`` (``monitored_call``);
+  ``step_energy = false`` (``makes_monitored_call``);
 * anything a run raises, ``BaseException`` included (``SystemExit``, a ``KeyboardInterrupt`` raised by a
   plug-in), and any malformed result (a counter that is not a non-negative integer, a state of the wrong
   shape) becomes a ``failed`` row with the reason (bench/README.md, "Nothing is lost");
@@ -43,8 +43,8 @@ if TYPE_CHECKING:  # the main process imports this module before its workers sta
     from foucault_bench.bench.problems.scenes import Scene
     from foucault_bench.bench.run.matrix import RunSpec
 
-__all__ = ["SceneReady", "base_row", "checked_row", "execute_run", "monitored_call", "prepare_scene", "run_failure",
-           "scene_failure"]
+__all__ = ["SceneReady", "base_row", "checked_row", "execute_run", "makes_monitored_call", "prepare_scene",
+           "run_failure", "scene_failure"]
 
 STATUS_OK, STATUS_DIVERGED, STATUS_FAILED = "ok", "diverged", "failed"  # integrators.base, not imported here
 NOT_DETERMINISTIC = "warning: the output differed between repeated calls (not deterministic)"
@@ -92,10 +92,10 @@ def prepare_scene(scene: Scene, plugins: tuple[str, ...] = ()) -> SceneReady:
         return SceneReady(scene.name, scene_key(scene), [], None, f"model adequacy failed: {describe(error)}")
 
 
-def monitored_call(integrator: Any, spec: RunSpec) -> bool:
+def makes_monitored_call(integrator: Any, spec: RunSpec) -> bool:
     """Whether the run makes the untimed ``monitor=True`` call after its timed repeats: the integrator streams
     a verdict ingredient the grid cannot give and the matrix asks for it (``RunSpec.step_energy``)."""
-    return bool(integrator.streams_step_metrics) and spec.step_energy
+    return bool(integrator.streams_step_metrics and spec.step_energy)
 
 
 def base_row(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
@@ -184,7 +184,7 @@ def execute_run(spec: RunSpec, matrix_id: str) -> dict[str, Any]:
         timed, last, timing = time_repeated(lambda: solve(False), spec.timing,
                                             accept=lambda solution: solution.status == STATUS_OK,
                                             calibrate=calibration_chunk_cpu_s, warm_up=warm_up)
-        first = solve(True) if monitored_call(integrator, spec) else timed  # untimed: + per-step metrics
+        first = solve(True) if makes_monitored_call(integrator, spec) else timed  # untimed: + per-step metrics
         row.update(status=first.status, message=first.message,
                    **{name: None if getattr(first, name) is None else int(getattr(first, name)) for name in COUNTERS})
         if first.step_size_s is not None and spec.kh is not None:  # the loop may shorten the requested step

@@ -48,12 +48,13 @@ class RunSpec:
     timing: TimingPolicy
     code_version: str
     declared: tuple[tuple[str, Any], ...] = ()
-    step_energy: bool = True
-    """Whether a fixed-step run also makes its untimed monitored call for the per-step energy error
-    (``energy_max_rel_error_steps``; the matrix's ``step_energy``, ``bench.run.matrix``)."""
     """The columns a row takes from the matrix as (results column, value) pairs: the integrator's declared facts
     (``bench.schema.declared_facts``) and, for an ensemble member, its ensemble and swept values
     (``bench.problems.ensemble.member_columns``)."""
+    step_energy: bool = True
+    """Whether an integrator that streams step metrics (the fixed-step loops) also makes its untimed monitored
+    call, for the per-step energy error (``energy_max_rel_error_steps``; the matrix's ``step_energy``,
+    ``bench.run.matrix``)."""
 
     @property
     def step_s(self) -> float | None:
