@@ -6,10 +6,10 @@ integrator, the exact setting), whatever the code version that made them.
 * **Accuracy** (``ACCURACY_COLUMNS``: the status, the verdicts, the counts): a change is any difference of the bits
   (``bench.run.store``'s bitwise identity; NaN equals NaN), because these columns are deterministic for one
   matrix on one machine (a column a matrix may leave out, ``bench.schema.OPTIONAL_VERDICT_COLUMNS``, is compared
-  only where both rows hold it). Between two machines (another CPU model on the two sides) the compiled code of numba
-  and heyoka (LLVM, tuned to the host CPU) may round differently, so real-valued columns there count as changed
-  only beyond ``CROSS_MACHINE_RELATIVE`` of the larger value or ``CROSS_MACHINE_ABSOLUTE`` (a round-off level
-  of the relative errors); counts and statuses stay exact. Both tolerances are choices stated here, not
+  only where both rows hold it). Between two machines (another CPU model on the two sides) the compiled code of
+  numba and heyoka (LLVM, tuned to the host CPU) may round differently, so real-valued columns there count as
+  changed only beyond ``CROSS_MACHINE_RELATIVE`` of the larger value or ``CROSS_MACHINE_ABSOLUTE`` (a round-off
+  level of the relative errors); counts and statuses stay exact. Both tolerances are choices stated here, not
   measurements.
 * **Cost** (CPU time): each run's timed repeats (``cpu_time_repeats_s``). Between two machines (another CPU
   model on the two sides) they are divided by the calibration timed beside each run (``calibration_cpu_s``, a

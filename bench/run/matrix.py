@@ -41,8 +41,8 @@ no two scenes of a matrix may share a name, and none may have more than ``MAX_SC
 ``step_energy`` (default ``true``): every run of an integrator that streams step metrics (the fixed-step loops)
 also makes one untimed call with ``monitor=True``, which streams the energy error of every step (column
 ``energy_max_rel_error_steps``; the grid's energy error, ``energy_max_rel_error``, is in every row either way).
-That call integrates the run once more: with ``false`` the column is NULL and the matrix costs that much less (the default matrix: about 50 s of CPU of its ~340 s,
-bench/PERF.md "The per-step energy error made optional").
+That call integrates the run once more: with ``false`` the column is NULL and the matrix costs that much less
+(the default matrix: about 50 s of CPU of its ~340 s, bench/PERF.md "The per-step energy error made optional").
 
 Plug-ins (``plugins``) are Python modules: importing one runs its code. They are imported only once the rest
 of the matrix is valid, and each must register at least one integrator.
