@@ -135,8 +135,9 @@ def working_precision() -> gmpy2.context:
 
 def final_position(method: ExactMethod, problem: Problem, n_steps: int) -> tuple[gmpy2.mpfr, gmpy2.mpfr]:
     """(x, y) after ``n_steps`` steps of the exact main method over the problem's span, in gmpy2's current
-    context (``working_precision``): a Runge-Kutta tableau's c, A and b (HNW I, §II.1) or a general Runge-Kutta-Nyström pair's c, ā, a,
-    b̄ and b (HNW I, §II.14; ``integrators.rkn``). Every model is autonomous (``Model.acceleration`` has no t)."""
+    context (``working_precision``): a Runge-Kutta tableau's c, A and b (HNW I, §II.1) or a general
+    Runge-Kutta-Nyström pair's c, ā, a, b̄ and b (HNW I, §II.14; ``integrators.rkn``). Every model is autonomous
+    (``Model.acceleration`` has no t)."""
     math_namespace = types.SimpleNamespace(sqrt=gmpy2.sqrt, sin=gmpy2.sin, cos=gmpy2.cos)
     p = [gmpy2.mpfr(float(value)) for value in problem.parameter_vector]
     model = problem.model
